@@ -1,0 +1,273 @@
+//! Checks of a groom's consistency, reporting every problem with its place.
+
+use crate::{Groom, Scope};
+use std::fmt;
+
+/// What is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ProblemKind {
+    /// The strand counts do not add up to the number of points.
+    CountMismatch { counted: u64, points: usize },
+    /// A strand with no points at all.
+    EmptyStrand,
+    /// A strand of one point: USC-HairSalon's "no hair at this root" marker.
+    /// Not fatal.
+    SinglePointStrand,
+    /// A coordinate is NaN or infinite.
+    NonFinitePoint,
+    /// An attribute has the wrong number of elements for its scope.
+    AttributeLength {
+        name: String,
+        expected: usize,
+        found: usize,
+    },
+    /// An attribute value is NaN or infinite.
+    NonFiniteAttribute { name: String },
+    /// A frame has a different number of points than the groom.
+    FrameLength { expected: usize, found: usize },
+    /// Frame times do not increase.
+    FrameTimeOrder,
+}
+
+/// One problem found by [`Groom::validate`], with where it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Problem {
+    pub kind: ProblemKind,
+    pub strand: Option<usize>,
+    pub vertex: Option<usize>,
+    pub frame: Option<usize>,
+}
+
+impl Problem {
+    /// True for problems that make the groom unusable; false for the ones
+    /// that are only flagged (single-point strands).
+    pub fn is_fatal(&self) -> bool {
+        !matches!(self.kind, ProblemKind::SinglePointStrand)
+    }
+
+    fn new(kind: ProblemKind) -> Problem {
+        Problem {
+            kind,
+            strand: None,
+            vertex: None,
+            frame: None,
+        }
+    }
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut place = Vec::new();
+        if let Some(frame) = self.frame {
+            place.push(format!("frame {frame}"));
+        }
+        if let Some(strand) = self.strand {
+            place.push(format!("strand {strand}"));
+        }
+        if let Some(vertex) = self.vertex {
+            place.push(format!("vertex {vertex}"));
+        }
+        if !place.is_empty() {
+            write!(f, "{}: ", place.join(", "))?;
+        }
+        match &self.kind {
+            ProblemKind::CountMismatch { counted, points } => write!(
+                f,
+                "strand vertex counts add up to {counted} but there are {points} points"
+            ),
+            ProblemKind::EmptyStrand => write!(f, "strand has no points"),
+            ProblemKind::SinglePointStrand => {
+                write!(f, "strand has a single point (no hair at this root)")
+            }
+            ProblemKind::NonFinitePoint => write!(f, "point is not finite"),
+            ProblemKind::AttributeLength {
+                name,
+                expected,
+                found,
+            } => write!(
+                f,
+                "attribute '{name}' has {found} values, expected {expected}"
+            ),
+            ProblemKind::NonFiniteAttribute { name } => {
+                write!(f, "attribute '{name}' has a value that is not finite")
+            }
+            ProblemKind::FrameLength { expected, found } => {
+                write!(f, "frame has {found} points, expected {expected}")
+            }
+            ProblemKind::FrameTimeOrder => write!(f, "frame time does not increase"),
+        }
+    }
+}
+
+impl Groom {
+    /// Every problem of the groom, each with its strand/vertex/frame index.
+    /// Only fatal problems ([`Problem::is_fatal`]) make it unusable.
+    pub fn validate(&self) -> Vec<Problem> {
+        let mut problems = Vec::new();
+        let counted: u64 = self.strand_vertex_counts.iter().map(|&c| c as u64).sum();
+        if counted != self.points.len() as u64 {
+            problems.push(Problem::new(ProblemKind::CountMismatch {
+                counted,
+                points: self.points.len(),
+            }));
+        }
+        let mut start = 0usize;
+        for (strand, &count) in self.strand_vertex_counts.iter().enumerate() {
+            let kind = match count {
+                0 => Some(ProblemKind::EmptyStrand),
+                1 => Some(ProblemKind::SinglePointStrand),
+                _ => None,
+            };
+            if let Some(kind) = kind {
+                problems.push(Problem {
+                    strand: Some(strand),
+                    ..Problem::new(kind)
+                });
+            }
+            let end = start.saturating_add(count as usize).min(self.points.len());
+            if start < end {
+                push_non_finite(&mut problems, &self.points[start..end], start, strand, None);
+            }
+            start = end;
+        }
+        for attribute in &self.attributes {
+            let expected = match attribute.scope {
+                Scope::Vertex => self.points.len(),
+                Scope::Strand => self.strand_vertex_counts.len(),
+            };
+            let found = attribute.values.len();
+            if found != expected {
+                problems.push(Problem::new(ProblemKind::AttributeLength {
+                    name: attribute.name.clone(),
+                    expected,
+                    found,
+                }));
+            }
+            if let Some(index) = attribute.values.first_non_finite() {
+                let (strand, vertex) = match attribute.scope {
+                    Scope::Vertex => (self.strand_of_vertex(index), Some(index)),
+                    Scope::Strand => (Some(index), None),
+                };
+                problems.push(Problem {
+                    strand,
+                    vertex,
+                    ..Problem::new(ProblemKind::NonFiniteAttribute {
+                        name: attribute.name.clone(),
+                    })
+                });
+            }
+        }
+        let mut previous_time = f64::NEG_INFINITY;
+        for (index, frame) in self.frames.iter().enumerate() {
+            if frame.points.len() != self.points.len() {
+                problems.push(Problem {
+                    frame: Some(index),
+                    ..Problem::new(ProblemKind::FrameLength {
+                        expected: self.points.len(),
+                        found: frame.points.len(),
+                    })
+                });
+            } else {
+                for (strand, range) in self.strand_ranges().enumerate() {
+                    push_non_finite(
+                        &mut problems,
+                        &frame.points[range.clone()],
+                        range.start,
+                        strand,
+                        Some(index),
+                    );
+                }
+            }
+            if frame.time.is_nan() || frame.time <= previous_time {
+                problems.push(Problem {
+                    frame: Some(index),
+                    ..Problem::new(ProblemKind::FrameTimeOrder)
+                });
+            }
+            previous_time = frame.time;
+        }
+        problems
+    }
+
+    /// The range of point indices of each strand, clipped to the points.
+    pub fn strand_ranges(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let total = self.points.len();
+        let mut start = 0usize;
+        self.strand_vertex_counts.iter().map(move |&count| {
+            let end = start.saturating_add(count as usize).min(total);
+            let range = start..end;
+            start = end;
+            range
+        })
+    }
+
+    /// The strand a vertex index belongs to.
+    pub fn strand_of_vertex(&self, vertex: usize) -> Option<usize> {
+        self.strand_ranges().position(|r| r.contains(&vertex))
+    }
+}
+
+fn push_non_finite(
+    problems: &mut Vec<Problem>,
+    points: &[[f32; 3]],
+    first_index: usize,
+    strand: usize,
+    frame: Option<usize>,
+) {
+    for (offset, p) in points.iter().enumerate() {
+        if !p.iter().all(|c| c.is_finite()) {
+            problems.push(Problem {
+                strand: Some(strand),
+                vertex: Some(first_index + offset),
+                frame,
+                ..Problem::new(ProblemKind::NonFinitePoint)
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{Attribute, AttributeValues, Frame, Groom};
+
+    #[test]
+    fn reports_every_problem_with_its_place() {
+        let mut groom = Groom::from_strands([
+            vec![[0.0, 0.0, 0.0]],
+            vec![[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0]],
+        ]);
+        groom
+            .attributes
+            .push(Attribute::new("width", AttributeValues::Float(vec![1.0])));
+        groom.frames.push(Frame {
+            time: 0.0,
+            points: vec![[0.0; 3]; 2],
+        });
+        let problems = groom.validate();
+        let text: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
+        assert_eq!(
+            text,
+            vec![
+                "strand 0: strand has a single point (no hair at this root)",
+                "strand 1, vertex 2: point is not finite",
+                "attribute 'width' has 1 values, expected 3",
+                "frame 0: frame has 2 points, expected 3",
+            ]
+        );
+        assert!(!problems[0].is_fatal());
+        assert!(problems[1].is_fatal());
+    }
+
+    #[test]
+    fn clean_groom_has_no_problems() {
+        let groom = Groom::from_strands([vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+        assert!(groom.validate().is_empty());
+    }
+
+    #[test]
+    fn count_mismatch_is_reported() {
+        let mut groom = Groom::from_strands([vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
+        groom.strand_vertex_counts[0] = 5;
+        assert!(groom.validate().iter().any(|p| p.is_fatal()));
+    }
+}

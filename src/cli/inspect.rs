@@ -1,0 +1,94 @@
+//! `groombake inspect FILE [--json]`.
+
+use clap::Args;
+use groom::Groom;
+use serde_json::json;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The groom file.
+    file: PathBuf,
+    /// Print a JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The facts `inspect` prints, as JSON.
+pub fn summary(groom: &Groom) -> serde_json::Value {
+    let (min, max) = groom.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+    let problems = groom.validate();
+    let single_point = problems
+        .iter()
+        .filter(|p| matches!(p.kind, groom::ProblemKind::SinglePointStrand))
+        .count();
+    let attributes: Vec<_> = groom
+        .attributes
+        .iter()
+        .map(|a| {
+            json!({
+                "name": a.name,
+                "scope": a.scope,
+                "type": a.values.type_name(),
+                "count": a.values.len(),
+            })
+        })
+        .collect();
+    let times: Vec<f64> = groom.frames.iter().map(|f| f.time).collect();
+    json!({
+        "file": groom.provenance.source.as_ref().map(|p| p.display().to_string()),
+        "format": groom.provenance.format,
+        "info": groom.provenance.info,
+        "strands": groom.strand_count(),
+        "vertices": groom.vertex_count(),
+        "single_point_strands": single_point,
+        "bounds": { "min": min, "max": max },
+        "units": groom.units.name(),
+        "meters_per_unit": groom.units.meters_per_unit,
+        "up_axis": groom.up_axis.name(),
+        "basis": groom.basis.name(),
+        "frames": groom.frames.len(),
+        "frame_times": times,
+        "attributes": attributes,
+        "first_point": groom.points.first(),
+    })
+}
+
+pub fn run(args: InspectArgs) -> anyhow::Result<()> {
+    let groom = super::read_groom(&args.file)?;
+    let summary = summary(&groom);
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer_pretty(&mut out, &summary)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(out, "file        {}", args.file.display())?;
+    writeln!(out, "format      {}", groom.provenance.format)?;
+    writeln!(out, "strands     {}", groom.strand_count())?;
+    writeln!(out, "vertices    {}", groom.vertex_count())?;
+    if let Some((min, max)) = groom.bounds() {
+        writeln!(out, "bounds      {min:?} .. {max:?}")?;
+    }
+    writeln!(out, "units       {} (up {})", groom.units, groom.up_axis)?;
+    writeln!(out, "basis       {}", groom.basis.name())?;
+    writeln!(out, "frames      {}", groom.frames.len())?;
+    if let (Some(first), Some(last)) = (groom.frames.first(), groom.frames.last()) {
+        writeln!(out, "time        {} .. {} s", first.time, last.time)?;
+    }
+    for a in &groom.attributes {
+        writeln!(
+            out,
+            "attribute   {} ({:?} {}, {} values)",
+            a.name,
+            a.scope,
+            a.values.type_name(),
+            a.values.len()
+        )?;
+    }
+    for problem in groom.validate() {
+        writeln!(out, "note        {problem}")?;
+    }
+    Ok(())
+}

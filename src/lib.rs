@@ -1,0 +1,5 @@
+//! The groombake engine: procedural grooms, the hair simulation, timelines
+//! of treatments and previews. The command line in `main.rs` only composes
+//! these.
+
+pub mod generate;
