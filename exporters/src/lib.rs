@@ -9,6 +9,8 @@
 use groom::{Frame, Groom};
 use std::path::{Path, PathBuf};
 
+pub mod usd;
+
 /// Why a file could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
@@ -36,7 +38,7 @@ impl ExportError {
 }
 
 /// The file extensions the exporters know, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +73,9 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
 /// (`.hair`, `.data`, `.obj`) write its points.
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
-    match groom::Units::default() {
+    match extension_of(path).as_str() {
+        "usda" => usd::write(path, groom, usd::Encoding::Text),
+        "usdc" | "usd" => usd::write(path, groom, usd::Encoding::Crate),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -85,8 +89,19 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
-    let _ = options;
-    Err(ExportError::UnknownFormat {
-        file: path.to_path_buf(),
-    })
+    match extension_of(path).as_str() {
+        "usda" => usd::animated(path, groom, options, usd::Encoding::Text),
+        "usdc" | "usd" => usd::animated(path, groom, options, usd::Encoding::Crate),
+        _ => Err(ExportError::UnknownFormat {
+            file: path.to_path_buf(),
+        }),
+    }
+}
+
+/// The lower-case extension of a path.
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
 }
