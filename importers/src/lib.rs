@@ -8,6 +8,8 @@ use groom::Groom;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod usd;
+
 /// Where in a file a problem is.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Place {
@@ -70,7 +72,7 @@ impl ImportError {
 }
 
 /// The file extensions [`read`] knows, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd"];
 
 /// The lower-case extension of a path.
 pub fn extension_of(path: &Path) -> String {
@@ -85,17 +87,15 @@ pub fn extension_of(path: &Path) -> String {
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
     let mut groom: Groom = match extension_of(path).as_str() {
         // One arm per format module, e.g. `"hair" => hair::read(path)?,`.
+        "usda" | "usdc" | "usd" => usd::read(path)?,
         _ => {
             return Err(ImportError::UnknownFormat {
                 file: path.to_path_buf(),
             })
         }
     };
-    #[allow(unreachable_code)]
-    {
-        groom.provenance.source = Some(path.to_path_buf());
-        Ok(groom)
-    }
+    groom.provenance.source = Some(path.to_path_buf());
+    Ok(groom)
 }
 
 /// Reads a whole file, naming it in the error.
