@@ -4,7 +4,7 @@
 //! Expectation keys for the validator: `curves`, `points`, `first_point`,
 //! `meters_per_unit`, `up_axis`, `basis`, `time_samples`, and for animated
 //! files `start_time_code`, `end_time_code`, `time_codes_per_second`,
-//! `sample_first_points` (`[time code, first point]` per sample), plus
+//! `sample_points` (`[time code, point index, point]` items), plus
 //! `primvars` (name -> interpolation) and `widths` (interpolation).
 
 use crate::util::{hand_to_validators, shared_data, TestDir};
@@ -173,7 +173,7 @@ fn animated_usdc_has_one_time_sample_per_frame() {
         .frames
         .iter()
         .enumerate()
-        .map(|(i, f)| json!([i as f64, f.points[6]]))
+        .map(|(i, f)| json!([i as f64, 6, f.points[6]]))
         .collect();
     for name in ["bake.usdc", "bake.usda"] {
         hand_to_validators(
@@ -190,7 +190,7 @@ fn animated_usdc_has_one_time_sample_per_frame() {
                 "start_time_code": 0.0,
                 "end_time_code": (frames - 1) as f64,
                 "time_codes_per_second": 24.0,
-                "sample_first_points": samples,
+                "sample_points": samples,
                 "widths": "vertex",
                 "primvars": {
                     "st": "uniform",

@@ -150,6 +150,10 @@ impl CrateWriter {
             // An empty array is a rep with payload 0 and no data.
             return Ok(value_rep(type_id, true, false, 0));
         }
+        // Arrays start on 8-byte boundaries, as OpenUSD writes them, so a
+        // reader mapping the file may use the data in place.
+        let padding = (8 - self.position % 8) % 8;
+        self.write_bytes(&[0u8; 8][..padding as usize])?;
         let mut scratch = std::mem::take(&mut self.scratch);
         scratch.clear();
         scratch.extend_from_slice(&(count as u64).to_le_bytes());
