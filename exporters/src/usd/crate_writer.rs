@@ -593,8 +593,10 @@ pub(super) struct AnimatedCrate {
 }
 
 impl AnimatedCrate {
-    pub fn create(path: &Path, scene: CurvesScene) -> Result<AnimatedCrate, ExportError> {
+    pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedCrate, ExportError> {
         let writer = CrateWriter::create(path, &scene)?;
+        // The arrays are in the file; `finish` needs only their reps.
+        scene.forget_values();
         Ok(AnimatedCrate {
             writer,
             scene,

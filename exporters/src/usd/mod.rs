@@ -222,6 +222,21 @@ impl CurvesScene {
         })
     }
 
+    /// Drops the property values once a writer has written them, keeping
+    /// names, types and tokens: an animated export then holds no copy of
+    /// the groom's arrays while frames stream.
+    pub fn forget_values(&mut self) {
+        for property in &mut self.properties {
+            match &mut property.value {
+                PropertyValue::Token(_) => {}
+                PropertyValue::Ints(v) => *v = Vec::new(),
+                PropertyValue::Floats(v) => *v = Vec::new(),
+                PropertyValue::Float2s(v) => *v = Vec::new(),
+                PropertyValue::Float3s(v) => *v = Vec::new(),
+            }
+        }
+    }
+
     /// The extent of one pose.
     pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
         extent_of(points, self.extent_padding)

@@ -1,8 +1,10 @@
 //! `.usda` text writer.
 //!
 //! An animated export cannot write the text in file order as frames arrive
-//! (the stage header names the last time code), so the `points` samples go
-//! to a spill file beside the output and are copied into place by `finish`.
+//! (the stage header names the last time code), so everything after the
+//! header goes to a spill file beside the output: the static properties when
+//! the export starts, then the `points` samples frame by frame, then the
+//! extents. `finish` writes the header and copies the spill file after it.
 //! Memory stays at one frame plus one extent per frame.
 
 use super::{time_code, CurvesScene, Property, PropertyValue, CURVES_PRIM, ROOT_PRIM};
@@ -16,29 +18,22 @@ use std::path::{Path, PathBuf};
 pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
     let io_error = |e| ExportError::io(path, e);
     let mut file = AtomicFile::create(path).map_err(io_error)?;
-    write_document(&mut file, scene, None).map_err(io_error)?;
+    file.write_all(header(scene, None).as_bytes())
+        .and_then(|()| write_properties(&mut file, scene))
+        .and_then(|()| file.write_all(CLOSING))
+        .map_err(io_error)?;
     file.commit().map_err(io_error)
 }
 
-/// Time samples collected while streaming.
-struct Samples<'a> {
-    /// `(time code, extent)` of every frame.
-    extents: &'a [(f64, [[f32; 3]; 2])],
-    /// The `points` entries, already formatted, one per line.
-    points: &'a mut dyn io::Read,
-}
+/// Closes the curves prim and the root.
+const CLOSING: &[u8] = b"    }\n}\n";
 
-fn write_document(
-    out: &mut dyn Write,
-    scene: &CurvesScene,
-    samples: Option<Samples<'_>>,
-) -> io::Result<()> {
+/// Stage metadata and the openings of the root and curves prims; `range`
+/// is the first and last time code of an animated export.
+fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let mut header = String::from("#usda 1.0\n(\n");
     let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
     header.push_str("    doc = \"Written by groombake\"\n");
-    let range = samples
-        .as_ref()
-        .and_then(|s| Some((s.extents.first()?.0, s.extents.last()?.0)));
     if let (Some(timing), Some((start, end))) = (scene.timing, range) {
         let _ = writeln!(header, "    endTimeCode = {end}");
         let _ = writeln!(header, "    framesPerSecond = {}", timing.fps);
@@ -52,36 +47,17 @@ fn write_document(
     header.push_str(")\n\n");
     let _ = writeln!(header, "def Xform \"{ROOT_PRIM}\"\n{{");
     let _ = writeln!(header, "    def BasisCurves \"{CURVES_PRIM}\"\n    {{");
-    out.write_all(header.as_bytes())?;
+    header
+}
 
-    let mut samples = samples;
+fn write_properties(out: &mut dyn Write, scene: &CurvesScene) -> io::Result<()> {
+    let mut text = String::new();
     for property in &scene.properties {
-        let mut text = String::new();
+        text.clear();
         write_property(&mut text, property);
         out.write_all(text.as_bytes())?;
-        let Some(samples) = samples.as_mut() else {
-            continue;
-        };
-        match property.name.as_str() {
-            "extent" => {
-                let mut text = String::from("        float3[] extent.timeSamples = {\n");
-                for (code, extent) in samples.extents {
-                    let _ = write!(text, "            {code}: ");
-                    write_float3s(&mut text, extent);
-                    text.push_str(",\n");
-                }
-                text.push_str("        }\n");
-                out.write_all(text.as_bytes())?;
-            }
-            "points" => {
-                out.write_all(b"        point3f[] points.timeSamples = {\n")?;
-                io::copy(samples.points, out)?;
-                out.write_all(b"        }\n")?;
-            }
-            _ => {}
-        }
     }
-    out.write_all(b"    }\n}\n")
+    Ok(())
 }
 
 fn write_property(text: &mut String, property: &Property) {
@@ -183,8 +159,16 @@ pub(super) struct AnimatedUsda {
 }
 
 impl AnimatedUsda {
-    pub fn create(path: &Path, scene: CurvesScene) -> Result<AnimatedUsda, ExportError> {
-        let spill = SpillFile::create(path).map_err(|e| ExportError::io(path, e))?;
+    pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedUsda, ExportError> {
+        let io_error = |e| ExportError::io(path, e);
+        let mut spill = SpillFile::create(path).map_err(io_error)?;
+        let writer = spill.writer().map_err(io_error)?;
+        write_properties(writer, &scene)
+            .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
+            .map_err(io_error)?;
+        // The static values are in the spill file now; only the metadata
+        // is needed until the end.
+        scene.forget_values();
         Ok(AnimatedUsda {
             path: path.to_path_buf(),
             scene,
@@ -221,21 +205,32 @@ impl FrameWriter for AnimatedUsda {
     }
 
     fn finish(self: Box<Self>) -> Result<(), ExportError> {
-        let this = *self;
+        let mut this = *self;
         let io_error = |e| ExportError::io(&this.path, e);
-        if this.extents.is_empty() {
+        let (Some(&(start, _)), Some(&(end, _))) = (this.extents.first(), this.extents.last())
+        else {
             return Err(ExportError::Invalid {
                 file: this.path.clone(),
                 message: "an animated export needs at least one frame".into(),
             });
-        }
-        let (mut points, _spill) = this.spill.into_reader().map_err(io_error)?;
-        let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
-        let samples = Samples {
-            extents: &this.extents,
-            points: &mut points,
         };
-        write_document(&mut file, &this.scene, Some(samples)).map_err(io_error)?;
+        let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
+        for (code, extent) in &this.extents {
+            let _ = write!(tail, "            {code}: ");
+            write_float3s(&mut tail, extent);
+            tail.push_str(",\n");
+        }
+        tail.push_str("        }\n");
+        let spill_writer = this.spill.writer().map_err(io_error)?;
+        spill_writer
+            .write_all(tail.as_bytes())
+            .and_then(|()| spill_writer.write_all(CLOSING))
+            .map_err(io_error)?;
+        let (mut body, _spill) = this.spill.into_reader().map_err(io_error)?;
+        let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
+        file.write_all(header(&this.scene, Some((start, end))).as_bytes())
+            .and_then(|()| io::copy(&mut body, &mut file).map(|_| ()))
+            .map_err(io_error)?;
         file.commit().map_err(io_error)
     }
 }

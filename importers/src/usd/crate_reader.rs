@@ -336,12 +336,18 @@ impl<'a> CrateReader<'a> {
         let width: u64 = if wide { 8 } else { 4 };
         let max = count
             .checked_mul(width)
-            .and_then(|n| n.checked_add(width + (count * 2).div_ceil(8)))
+            .and_then(|n| n.checked_add(width + count.div_ceil(4)))
             .ok_or_else(|| self.error(offset, format!("{what}: count {count} is too large")))?;
         if count == 0 {
             // Writers may still store an (empty) buffer.
             let size = self.u64_at(offset, what)?;
-            return Ok((Vec::new(), offset + 8 + size));
+            let next = (offset + 8)
+                .checked_add(size)
+                .filter(|&next| next <= end)
+                .ok_or_else(|| {
+                    self.error(offset, format!("{what}: size {size} overruns its section"))
+                })?;
+            return Ok((Vec::new(), next));
         }
         let (buffer, next) = self.compressed(offset, end, max, what)?;
         let ints = decode_ints(&buffer, count, wide)

@@ -474,7 +474,7 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         .attribute("points")
         .ok_or_else(|| prim_error(format!("BasisCurves {} has no points", prim.path)))?;
     let check_points = |values: &[f64], what: &str| -> Result<(), ImportError> {
-        if values.len() as u64 != total * 3 {
+        if values.len() as u128 != u128::from(total) * 3 {
             return Err(at(
                 points_attribute,
                 format!(

@@ -522,3 +522,23 @@ fn element_kinds() {
     assert_eq!(element_kind("point4f"), None);
     assert_eq!(element_kind("rel"), None);
 }
+
+#[test]
+fn deep_nesting_is_an_error_not_a_stack_overflow() {
+    let depth = 5000;
+    let mut text = String::from("#usda 1.0\n");
+    for i in 0..depth {
+        text.push_str(&format!("def \"P{i}\" {{\n"));
+    }
+    text.push_str(&"}\n".repeat(depth));
+    let error = error_text(&text);
+    assert!(error.contains("prims nested too deeply"), "{error}");
+
+    let brackets = format!(
+        "#usda 1.0\n(\n    customData = {}{}\n)\n",
+        "{".repeat(depth),
+        "}".repeat(depth)
+    );
+    let error = error_text(&brackets);
+    assert!(error.contains("nested too deeply"), "{error}");
+}
