@@ -555,6 +555,10 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         attributes: Vec::new(),
         notes: Vec::new(),
     };
+    // The groom has no wrap: the control points are kept as they are.
+    if let Some(wrap) = token("wrap").filter(|w| w != "nonperiodic") {
+        set.notes.push(format!("wrap {wrap} read as nonperiodic"));
+    }
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()

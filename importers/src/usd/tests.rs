@@ -60,6 +60,14 @@ fn blender_hair_usda() {
     assert!(groom.validate().is_empty());
 }
 
+#[test]
+fn blender_hair_as_crate_reads_like_the_text() {
+    let text = read(&shared("blender501_hair.usda")).unwrap();
+    let mut binary = read(&data("blender501_hair_by_usd_core.usdc")).unwrap();
+    binary.provenance.source = text.provenance.source.clone();
+    assert_eq!(binary, text);
+}
+
 /// A file written by usd-core (the reference implementation), read back
 /// against the world-space values usd-core computes for it: compressed
 /// int and float arrays, LZ4 with matches, orient/rotate/scale/matrix ops

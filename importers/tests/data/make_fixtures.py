@@ -78,3 +78,8 @@ for ext in ("usdc", "usda"):
     stage = build(f"reference.{ext}")
     with open("reference.json", "w") as f:
         json.dump(expected(stage), f, separators=(",", ":"))
+
+# Blender's file as usd-core writes it in crate form (inlined vectors,
+# strings, dictionaries, token arrays).
+Sdf.Layer.FindOrOpen("../../../../shared/data/blender501_hair.usda").Export(
+    "blender501_hair_by_usd_core.usdc")
