@@ -4,3 +4,4 @@
 
 pub mod generate;
 pub mod stochastic_wind;
+pub mod timeline;

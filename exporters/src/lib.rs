@@ -38,6 +38,9 @@ impl ExportError {
 /// The file extensions the exporters know, lower case, without the dot.
 pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
 
+/// The extensions of formats that can hold animation.
+pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb"];
+
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AnimationOptions {
