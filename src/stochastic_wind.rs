@@ -61,7 +61,11 @@ fn direction(theta: f64, phi: f64) -> [f64; 3] {
 fn angles(d: [f64; 3]) -> (f64, f64) {
     let horizontal = (d[0] * d[0] + d[2] * d[2]).sqrt();
     let phi = horizontal.atan2(-d[1]);
-    let theta = if horizontal > 0.0 { d[0].atan2(d[2]) } else { 0.0 };
+    let theta = if horizontal > 0.0 {
+        d[0].atan2(d[2])
+    } else {
+        0.0
+    };
     (theta, phi)
 }
 
@@ -114,7 +118,8 @@ fn nearest_on_ellipsoid(p: [f64; 3], radii: [f64; 3]) -> [f64; 3] {
             .filter(|&i| i != axis)
             .map(|i| (p[i] / radii[i]).powi(2))
             .sum();
-        x[axis] = radii[axis] * (1.0 - rest).max(0.0).sqrt() * if p[axis] < 0.0 { -1.0 } else { 1.0 };
+        x[axis] =
+            radii[axis] * (1.0 - rest).max(0.0).sqrt() * if p[axis] < 0.0 { -1.0 } else { 1.0 };
         return x;
     }
     for _ in 0..100 {
@@ -147,7 +152,9 @@ impl StochasticWind {
                 for w in points.windows(2) {
                     let d = [w[1][0] - w[0][0], w[1][1] - w[0][1], w[1][2] - w[0][2]];
                     let (theta, phi) = angles(d);
-                    chain.lengths.push((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+                    chain
+                        .lengths
+                        .push((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
                     chain.theta.push(theta);
                     chain.phi.push(phi);
                     chain.theta_velocity.push(0.0);
@@ -156,7 +163,11 @@ impl StochasticWind {
                 chain
             })
             .collect();
-        StochasticWind { chains, head, random: SplitMix64::new(seed) }
+        StochasticWind {
+            chains,
+            head,
+            random: SplitMix64::new(seed),
+        }
     }
 
     /// `theta_1, phi_1` at a root for flow direction `theta_u` and strength
@@ -186,7 +197,8 @@ impl StochasticWind {
             for i in 0..segments {
                 let p = segment_parameters(i, segments);
                 let (theta, phi) = (chain.theta[i], chain.phi[i]);
-                let th_acc = p.slope * wrap_angle(theta - theta_1) + random.next_normal() * p.theta_spread / 6.0;
+                let th_acc = p.slope * wrap_angle(theta - theta_1)
+                    + random.next_normal() * p.theta_spread / 6.0;
                 let th_turn = if phi.abs() < 0.3 {
                     // Near vertical the azimuth is free: a normal random in
                     // about [-6, 6] degrees (3 sigma).
@@ -196,7 +208,8 @@ impl StochasticWind {
                 };
                 let mut th_v = chain.theta_velocity[i] + th_turn;
                 let mut new_theta = wrap_angle(theta + th_v);
-                let ph_acc = p.slope * wrap_angle(phi - phi_1) + random.next_normal() * p.phi_spread / 6.0;
+                let ph_acc =
+                    p.slope * wrap_angle(phi - phi_1) + random.next_normal() * p.phi_spread / 6.0;
                 let mut ph_v = chain.phi_velocity[i] + ph_acc;
                 let mut new_phi = wrap_angle(phi + ph_v);
                 if i > 0 {
@@ -222,10 +235,18 @@ impl StochasticWind {
                 }
                 let d = direction(new_theta, new_phi);
                 let length = chain.lengths[i];
-                let mut end = [start[0] + d[0] * length, start[1] + d[1] * length, start[2] + d[2] * length];
+                let mut end = [
+                    start[0] + d[0] * length,
+                    start[1] + d[1] * length,
+                    start[2] + d[2] * length,
+                ];
                 // Head collision: an end inside the ellipsoid moves to the
                 // nearest point of its surface; the segment's angles follow.
-                let local = [end[0] - head.center[0], end[1] - head.center[1], end[2] - head.center[2]];
+                let local = [
+                    end[0] - head.center[0],
+                    end[1] - head.center[1],
+                    end[2] - head.center[2],
+                ];
                 let inside: f64 = (0..3).map(|k| (local[k] / head.radii[k]).powi(2)).sum();
                 if inside < 1.0 {
                     let surface = nearest_on_ellipsoid(local, head.radii);
@@ -235,7 +256,11 @@ impl StochasticWind {
                     new_phi = ph;
                     chain.lengths[i] = length;
                     let d = direction(t, ph);
-                    end = [start[0] + d[0] * length, start[1] + d[1] * length, start[2] + d[2] * length];
+                    end = [
+                        start[0] + d[0] * length,
+                        start[1] + d[1] * length,
+                        start[2] + d[2] * length,
+                    ];
                 }
                 chain.theta[i] = new_theta;
                 chain.phi[i] = new_phi;
@@ -256,7 +281,11 @@ impl StochasticWind {
                 points.push(p);
                 for i in 0..chain.lengths.len() {
                     let d = direction(chain.theta[i], chain.phi[i]);
-                    p = [p[0] + d[0] * chain.lengths[i], p[1] + d[1] * chain.lengths[i], p[2] + d[2] * chain.lengths[i]];
+                    p = [
+                        p[0] + d[0] * chain.lengths[i],
+                        p[1] + d[1] * chain.lengths[i],
+                        p[2] + d[2] * chain.lengths[i],
+                    ];
                     points.push(p);
                 }
                 points
@@ -270,11 +299,16 @@ mod tests {
     use super::*;
 
     fn hanging(root: [f64; 3], segments: usize, length: f64) -> Vec<[f64; 3]> {
-        (0..=segments).map(|i| [root[0], root[1] - i as f64 * length, root[2]]).collect()
+        (0..=segments)
+            .map(|i| [root[0], root[1] - i as f64 * length, root[2]])
+            .collect()
     }
 
     fn head() -> WindHead {
-        WindHead { center: [0.0, 0.0, 0.0], radii: [0.08, 0.1, 0.09] }
+        WindHead {
+            center: [0.0, 0.0, 0.0],
+            radii: [0.08, 0.1, 0.09],
+        }
     }
 
     #[test]
@@ -322,12 +356,18 @@ mod tests {
         let mut lifted = 0;
         for strand in &points {
             for w in strand.windows(2) {
-                let l = ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2) + (w[1][2] - w[0][2]).powi(2)).sqrt();
+                let l = ((w[1][0] - w[0][0]).powi(2)
+                    + (w[1][1] - w[0][1]).powi(2)
+                    + (w[1][2] - w[0][2]).powi(2))
+                .sqrt();
                 assert!((l - 0.012).abs() < 1e-9);
             }
             for p in &strand[1..] {
                 let inside: f64 = (0..3).map(|k| (p[k] / head().radii[k]).powi(2)).sum();
-                assert!(inside >= 1.0 - 1e-9, "segment end inside the head: {inside}");
+                assert!(
+                    inside >= 1.0 - 1e-9,
+                    "segment end inside the head: {inside}"
+                );
             }
             if strand[20][1] > strand[0][1] - 20.0 * 0.012 + 1e-3 {
                 lifted += 1;

@@ -59,7 +59,12 @@ impl Default for BondInfluences {
     /// The paper's scene 3 split (hydrogen + ionic 63 %, disulfide 20 %,
     /// peptide 17 %), with hydrogen 35 % and ionic 28 % (METHOD G's choice).
     fn default() -> Self {
-        BondInfluences { hydrogen: 0.35, ionic: 0.28, disulfide: 0.20, peptide: 0.17 }
+        BondInfluences {
+            hydrogen: 0.35,
+            ionic: 0.28,
+            disulfide: 0.20,
+            peptide: 0.17,
+        }
     }
 }
 
@@ -152,7 +157,13 @@ impl Default for SolverSpec {
             gravity: [0.0, -9.8, 0.0],
             hair_radius: Spanned::new(0..0, 4.0e-5),
             hair_hair: None,
-            damping: Spanned::new(0..0, DampingSpec { linear: 2.0, angular: 2.0 }),
+            damping: Spanned::new(
+                0..0,
+                DampingSpec {
+                    linear: 2.0,
+                    angular: 2.0,
+                },
+            ),
             quaternion_mass_scale: Spanned::new(0..0, 1.0),
         }
     }
@@ -163,11 +174,23 @@ impl Default for SolverSpec {
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum ShapeSpec {
     /// The half-space below a plane through the collider's origin.
-    HalfSpace { normal: [f32; 3] },
-    Cuboid { half_extents: [f32; 3] },
-    Ball { radius: f32 },
-    Capsule { half_height: f32, radius: f32 },
-    Cylinder { half_height: f32, radius: f32 },
+    HalfSpace {
+        normal: [f32; 3],
+    },
+    Cuboid {
+        half_extents: [f32; 3],
+    },
+    Ball {
+        radius: f32,
+    },
+    Capsule {
+        half_height: f32,
+        radius: f32,
+    },
+    Cylinder {
+        half_height: f32,
+        radius: f32,
+    },
     /// A triangle mesh from `.obj` or `.glb`/`.gltf`, relative to the timeline.
     Mesh {
         path: String,
@@ -297,7 +320,12 @@ pub struct RodSpec {
 
 impl Default for RodSpec {
     fn default() -> Self {
-        RodSpec { radius: 0.01, root_gap: 0.02, phases: [0.3, 0.4, 0.8], disulfide_cut: 0.2 }
+        RodSpec {
+            radius: 0.01,
+            root_gap: 0.02,
+            phases: [0.3, 0.4, 0.8],
+            disulfide_cut: 0.2,
+        }
     }
 }
 
