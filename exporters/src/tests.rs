@@ -369,3 +369,27 @@ fn int_and_vec2_attributes_in_gltf() {
     assert_eq!(uv.len(), n);
     assert_eq!(uv[2], [0.3, 0.4]);
 }
+
+#[test]
+fn every_cut_of_every_format_is_an_error_not_a_panic() {
+    let dir = Scratch::new();
+    let mut groom = sample_groom();
+    groom.frames = animation_frames(&groom, 2);
+    for ext in FORMATS {
+        let whole = dir.path(&format!("whole.{ext}"));
+        write(&whole, &groom).unwrap();
+        let bytes = std::fs::read(&whole).unwrap();
+        let cut_path = dir.path(&format!("cut.{ext}"));
+        // Every byte for the binary formats' headers, then every few bytes.
+        let cuts = (0..bytes.len().min(160)).chain((160..bytes.len()).step_by(7));
+        for cut in cuts {
+            std::fs::write(&cut_path, &bytes[..cut]).unwrap();
+            let result = importers::read(&cut_path);
+            // Text formats may still parse when cut at a line end; the
+            // binary ones must refuse every cut.
+            if matches!(ext, "hair" | "data" | "glb") {
+                assert!(result.is_err(), "{ext} cut at {cut} was accepted");
+            }
+        }
+    }
+}

@@ -543,12 +543,15 @@ fn crate_error(path: &Path, error: gltf::Error) -> ImportError {
                 .first()
                 .map(|(p, _)| Place::Path(p.to_string()))
                 .unwrap_or(Place::File);
-            let message = problems
-                .iter()
-                .map(|(p, e)| format!("{p}: {e}"))
-                .collect::<Vec<_>>()
-                .join("; ");
-            ImportError::malformed(path, place, format!("invalid glTF: {message}"))
+            // The place names the first problem; the message adds the others.
+            let mut message = problems
+                .first()
+                .map(|(_, e)| format!("invalid glTF: {e}"))
+                .unwrap_or_else(|| "invalid glTF".into());
+            for (p, e) in problems.iter().skip(1) {
+                message.push_str(&format!("; {p}: {e}"));
+            }
+            ImportError::malformed(path, place, message)
         }
         gltf::Error::Io(e) => ImportError::io(path, e),
         other => ImportError::malformed(path, Place::File, format!("invalid glTF: {other}")),
@@ -608,6 +611,168 @@ fn append_selected(into: &mut AttributeValues, from: &AttributeValues, indices: 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hand-made glTF: a LINE_STRIP under a translated parent and a scaled
+    /// child, with a morph target driven by a LINEAR weights sampler, and a
+    /// LINES primitive with u16 indices at the root. Returns (JSON, buffer).
+    fn hand_made(uri: Option<&str>) -> (String, Vec<u8>) {
+        let mut bin = Vec::new();
+        let mut floats = |values: &[f32]| {
+            for v in values {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        };
+        floats(&[0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0]); // 0: strip positions
+        floats(&[0.1, 0.2, 0.3]); // 36: strip widths
+        floats(&[1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0]); // 48: target deltas
+        floats(&[0.0, 1.0]); // 84: times
+        floats(&[0.0, 0.5]); // 92: weights
+        floats(&[5.0, 0.0, 0.0, 5.0, 1.0, 0.0, 6.0, 0.0, 0.0, 6.0, 1.0, 0.0]); // 100: lines positions
+        for i in [0u16, 1, 2, 3] {
+            bin.extend_from_slice(&i.to_le_bytes()); // 148: indices
+        }
+        let mut floats = |values: &[f32]| {
+            for v in values {
+                bin.extend_from_slice(&v.to_le_bytes());
+            }
+        };
+        floats(&[0.4, 0.5, 0.6, 0.7]); // 156: lines widths
+        let uri = uri.map(|u| format!(r#","uri":"{u}""#)).unwrap_or_default();
+        let view = |offset: usize, length: usize| {
+            format!(r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{length}}}"#)
+        };
+        let views = [
+            view(0, 36),
+            view(36, 12),
+            view(48, 36),
+            view(84, 8),
+            view(92, 8),
+            view(100, 48),
+            view(148, 8),
+            view(156, 16),
+        ]
+        .join(",");
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,2]}}],
+            "nodes":[{{"translation":[10,0,0],"children":[1]}},{{"scale":[2,2,2],"mesh":0}},{{"mesh":1}}],
+            "meshes":[
+              {{"primitives":[{{"mode":3,"attributes":{{"POSITION":0,"_WIDTH":1}},"targets":[{{"POSITION":2}}]}}],"weights":[0.25]}},
+              {{"primitives":[{{"mode":1,"attributes":{{"POSITION":5,"_WIDTH":7}},"indices":6}}]}}],
+            "animations":[{{"channels":[{{"sampler":0,"target":{{"node":1,"path":"weights"}}}}],
+              "samplers":[{{"input":3,"output":4,"interpolation":"LINEAR"}}]}}],
+            "accessors":[
+              {{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,2,0]}},
+              {{"bufferView":1,"componentType":5126,"count":3,"type":"SCALAR"}},
+              {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC3"}},
+              {{"bufferView":3,"componentType":5126,"count":2,"type":"SCALAR"}},
+              {{"bufferView":4,"componentType":5126,"count":2,"type":"SCALAR"}},
+              {{"bufferView":5,"componentType":5126,"count":4,"type":"VEC3","min":[5,0,0],"max":[6,1,0]}},
+              {{"bufferView":6,"componentType":5123,"count":4,"type":"SCALAR"}},
+              {{"bufferView":7,"componentType":5126,"count":4,"type":"SCALAR"}}],
+            "bufferViews":[{views}],
+            "buffers":[{{"byteLength":{}{uri}}}]}}"#,
+            bin.len()
+        );
+        (json, bin)
+    }
+
+    fn check_hand_made(groom: &Groom) {
+        assert_eq!(groom.strand_vertex_counts, vec![3, 2, 2]);
+        assert_eq!(
+            groom.points,
+            vec![
+                [10.0, 0.0, 0.0],
+                [10.0, 2.0, 0.0],
+                [10.0, 4.0, 0.0],
+                [5.0, 0.0, 0.0],
+                [5.0, 1.0, 0.0],
+                [6.0, 0.0, 0.0],
+                [6.0, 1.0, 0.0],
+            ]
+        );
+        assert_eq!(
+            groom.attribute("width").unwrap().values,
+            AttributeValues::Float(vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7])
+        );
+        assert_eq!(groom.frames.len(), 2);
+        assert_eq!(groom.frames[0].points, groom.points);
+        assert_eq!(groom.frames[1].time, 1.0);
+        // Weight 0.5 of a +1 x delta, scaled by 2 by the node.
+        assert_eq!(groom.frames[1].points[2], [11.0, 4.0, 0.0]);
+        assert_eq!(groom.frames[1].points[3], [5.0, 0.0, 0.0]);
+        assert_eq!(groom.units, Units::METERS);
+    }
+
+    #[test]
+    fn reads_embedded_gltf_with_scene_graph_and_morph_animation() {
+        let (_, bin) = hand_made(None);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let (json, _) = hand_made(Some(&format!(
+            "data:application/octet-stream;base64,{payload}"
+        )));
+        let groom = parse(Path::new("t.gltf"), json.as_bytes()).unwrap();
+        check_hand_made(&groom);
+    }
+
+    #[test]
+    fn reads_glb_and_external_buffers() {
+        let (json, bin) = hand_made(None);
+        let mut json = json.into_bytes();
+        while json.len() % 4 != 0 {
+            json.push(b' ');
+        }
+        let mut glb = Vec::new();
+        glb.extend_from_slice(b"glTF");
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+        glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"JSON");
+        glb.extend_from_slice(&json);
+        glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"BIN\0");
+        glb.extend_from_slice(&bin);
+        check_hand_made(&parse(Path::new("t.glb"), &glb).unwrap());
+        for cut in 0..glb.len() {
+            assert!(parse(Path::new("t.glb"), &glb[..cut]).is_err(), "cut {cut}");
+        }
+
+        let dir = std::env::temp_dir().join(format!("importers-gltf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("hair buffer.bin"), &bin).unwrap();
+        let (json, _) = hand_made(Some("hair%20buffer.bin"));
+        std::fs::write(dir.join("t.gltf"), &json).unwrap();
+        check_hand_made(&read(&dir.join("t.gltf")).unwrap());
+        std::fs::write(dir.join("hair buffer.bin"), &bin[..100]).unwrap();
+        let error = read(&dir.join("t.gltf")).unwrap_err().to_string();
+        assert!(error.contains(":/buffers/0: byteLength is 172"), "{error}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn accessor_past_its_view_names_the_accessor() {
+        let (_, bin) = hand_made(None);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let (json, _) = hand_made(Some(&format!(
+            "data:application/octet-stream;base64,{payload}"
+        )));
+        let json = json.replacen(
+            r#""count":4,"type":"VEC3""#,
+            r#""count":400,"type":"VEC3""#,
+            1,
+        );
+        let error = parse(Path::new("t.gltf"), json.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.starts_with("t.gltf:/accessors/5: 400 elements"),
+            "{error}"
+        );
+        let json = hand_made(Some("data:x;base64,@@")).0;
+        let error = parse(Path::new("t.gltf"), json.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("/buffers/0: bad base64"), "{error}");
+    }
 
     #[test]
     fn segments_chain_into_strands() {
