@@ -28,6 +28,9 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 
 type Matrix = [[f32; 4]; 4];
 
+/// The most points all frames together may have (3 GiB of coordinates).
+const MAX_FRAME_POINTS: u64 = 1 << 28;
+
 struct Reader<'a> {
     path: &'a Path,
     buffers: Vec<Vec<u8>>,
@@ -96,7 +99,17 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     // cycle the validation might let through.
     let mut stack: Vec<(gltf::Node, Matrix, usize)> =
         roots.into_iter().rev().map(|n| (n, identity, 0)).collect();
+    let mut visits = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
+        // Nodes shared by several parents could make the walk exponential.
+        visits += 1;
+        if visits > 1 << 20 {
+            return Err(ImportError::malformed(
+                path,
+                Place::Path("/nodes".into()),
+                "scene graph has over a million node instances (nodes shared by many parents?)",
+            ));
+        }
         if depth > 1024 {
             return Err(ImportError::malformed(
                 path,
@@ -306,8 +319,9 @@ impl Reader<'_> {
                 ),
             ));
         }
-        let mut values = Vec::with_capacity(accessor.count() * dims.multiplicity());
-        for element in self.elements(accessor)? {
+        let elements = self.elements(accessor)?;
+        let mut values = Vec::with_capacity(elements.len() * dims.multiplicity());
+        for element in elements {
             for c in element.chunks_exact(4) {
                 let v = f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
                 if !v.is_finite() {
@@ -437,6 +451,21 @@ impl Reader<'_> {
             weights_of_node.insert(node.index(), keys);
         }
         let times = times.unwrap_or_default();
+        let vertices: usize = pieces
+            .iter()
+            .flat_map(|p| p.strands.iter().map(Vec::len))
+            .sum();
+        // Few morph targets can drive many keyframes: bound what the frames
+        // would take before allocating them.
+        if (times.len() as u64).saturating_mul(vertices as u64) > MAX_FRAME_POINTS {
+            return Err(self.error(
+                format!("/animations/{}", animation.index()),
+                format!(
+                    "{} keyframes of {vertices} points are more than the {MAX_FRAME_POINTS} frame points groombake holds",
+                    times.len()
+                ),
+            ));
+        }
         let mut frames = Vec::with_capacity(times.len());
         for (k, &time) in times.iter().enumerate() {
             let mut points = Vec::new();

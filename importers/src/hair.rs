@@ -96,32 +96,34 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         ));
     }
 
-    let mut counts = Vec::with_capacity(hair_count as usize);
-    if flags & HAS_SEGMENTS != 0 {
+    // Strand lengths, checked against the point count before a per-strand
+    // array is allocated (without a segments array, hair_count is unchecked).
+    let counts = if flags & HAS_SEGMENTS != 0 {
+        let mut counts = Vec::with_capacity(hair_count as usize);
         for _ in 0..hair_count {
             counts.push(cursor.u16("the segments array")? as u32 + 1);
         }
+        let total: u64 = counts.iter().map(|&c| c as u64).sum();
+        if total != point_count as u64 {
+            return Err(cursor.error_at(
+                HEADER_SIZE,
+                format!("the segments array gives strands of {total} points in all, but the header says {point_count} points"),
+            ));
+        }
+        counts
     } else {
-        let per_strand = default_segments.checked_add(1).ok_or_else(|| {
-            cursor.error_at(
+        let per_strand = default_segments as u64 + 1;
+        let total = hair_count as u64 * per_strand;
+        if total != point_count as u64 {
+            return Err(cursor.error_at(
                 16,
-                format!("default segment count {default_segments} is too large"),
-            )
-        })?;
-        counts.resize(hair_count as usize, per_strand);
-    }
-    let total: u64 = counts.iter().map(|&c| c as u64).sum();
-    if total != point_count as u64 {
-        let (offset, source) = if flags & HAS_SEGMENTS != 0 {
-            (HEADER_SIZE, "the segments array")
-        } else {
-            (16, "the default segment count")
-        };
-        return Err(cursor.error_at(
-            offset,
-            format!("{source} gives strands of {total} points in all, but the header says {point_count} points"),
-        ));
-    }
+                format!(
+                    "{hair_count} hairs of {default_segments} default segments make {total} points, but the header says {point_count} points"
+                ),
+            ));
+        }
+        vec![per_strand as u32; hair_count as usize]
+    };
 
     let mut points = Vec::with_capacity(point_count as usize);
     for _ in 0..point_count {
@@ -284,6 +286,14 @@ mod tests {
         bytes[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
         let error = parse(Path::new("t.hair"), &bytes).unwrap_err().to_string();
         assert!(error.contains("file too short"), "{error}");
+    }
+
+    #[test]
+    fn huge_hair_count_without_segments_is_refused_before_allocating() {
+        let mut bytes = file(HAS_POINTS, &[0], &three_points(), 0);
+        bytes[4..8].copy_from_slice(&u32::MAX.to_le_bytes());
+        let error = parse(Path::new("t.hair"), &bytes).unwrap_err().to_string();
+        assert!(error.contains(":offset 16: 4294967295 hairs"), "{error}");
     }
 
     #[test]
