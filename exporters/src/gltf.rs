@@ -6,7 +6,8 @@
 //! and Houdini's importers and the Khronos validator all read data URIs.
 //!
 //! The groom becomes one mesh with one `LINES` primitive (a segment per pair
-//! of consecutive strand points), in metres and Y up as glTF requires.
+//! of consecutive strand points; a one-point strand is a segment from its
+//! point to itself), in metres and Y up as glTF requires.
 //! Vertex attributes are `_NAME` accessors (upper-case name; per-strand
 //! attributes are repeated on their strand's vertices). Animation is one
 //! morph target per frame (POSITION deltas from the rest pose) and a STEP
@@ -99,6 +100,11 @@ fn start(path: &Path, groom: &Groom) -> Result<GltfWriter, ExportError> {
     let mut indices = Vec::new();
     let mut first = 0u32;
     for &count in &groom.strand_vertex_counts {
+        // A one-point strand (an empty root of USC-HairSalon) becomes a
+        // degenerate segment, so that it survives the round trip.
+        if count == 1 {
+            indices.extend([first, first]);
+        }
         for k in 1..count {
             indices.push(first + k - 1);
             indices.push(first + k);

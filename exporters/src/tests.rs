@@ -176,17 +176,20 @@ fn data_to_data_is_byte_identical() {
 }
 
 #[test]
-fn single_point_strands_survive_data_and_obj() {
+fn single_point_strands_survive_data_obj_and_gltf() {
     let dir = Scratch::new();
     let mut groom = sample_groom();
     groom.attributes.clear();
     groom.strand_vertex_counts = vec![1, 1, 5, 3];
-    for ext in ["data", "obj"] {
+    for ext in ["data", "obj", "glb"] {
         let path = dir.path(&format!("single.{ext}"));
         write(&path, &groom).unwrap();
-        let back = importers::read(&path).unwrap();
+        let back = read_like(&path, &groom);
         assert_eq!(back.strand_vertex_counts, vec![1, 1, 5, 3], "{ext}");
-        assert_eq!(back.points, groom.points, "{ext}");
+        assert_points_close(&groom, &back, ext);
+        if ext != "glb" {
+            assert_eq!(back.points, groom.points, "{ext}");
+        }
     }
 }
 

@@ -500,11 +500,19 @@ impl Reader<'_> {
 }
 
 /// Joins `LINES` segments into strands: a segment that starts where the
-/// previous one ended continues its strand.
+/// previous one ended continues its strand; a degenerate segment `(i, i)` is
+/// a strand of one point.
 fn chain_segments(indices: &[usize]) -> Vec<Vec<usize>> {
     let mut strands: Vec<Vec<usize>> = Vec::new();
     for segment in indices.chunks_exact(2) {
+        // A segment from a vertex to itself is a one-point strand (how the
+        // exporter keeps USC-HairSalon's empty roots).
+        if segment[0] == segment[1] {
+            strands.push(vec![segment[0]]);
+            continue;
+        }
         match strands.last_mut() {
+            Some(strand) if strand.len() == 1 => strands.push(vec![segment[0], segment[1]]),
             Some(strand) if strand.last() == Some(&segment[0]) => strand.push(segment[1]),
             _ => strands.push(vec![segment[0], segment[1]]),
         }
@@ -806,8 +814,8 @@ mod tests {
     #[test]
     fn segments_chain_into_strands() {
         assert_eq!(
-            chain_segments(&[0, 1, 1, 2, 3, 4, 4, 5, 5, 6]),
-            vec![vec![0, 1, 2], vec![3, 4, 5, 6]]
+            chain_segments(&[0, 1, 1, 2, 3, 4, 4, 5, 5, 6, 7, 7, 7, 8]),
+            vec![vec![0, 1, 2], vec![3, 4, 5, 6], vec![7], vec![7, 8]]
         );
     }
 

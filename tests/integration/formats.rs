@@ -202,3 +202,31 @@ fn malformed_inputs_exit_2_without_output() {
         assert!(!dir.path("out.glb").exists(), "{file}: partial output");
     }
 }
+
+#[test]
+fn empty_roots_of_data_survive_glb() {
+    let dir = TestDir::new();
+    let strands: [&[[f32; 3]]; 4] = [
+        &[[0.0, 0.0, 0.0]],
+        &[[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 1.0]],
+        &[[1.0, 0.0, 0.0]],
+        &[[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]],
+    ];
+    let mut bytes = (strands.len() as i32).to_le_bytes().to_vec();
+    for strand in strands {
+        bytes.extend_from_slice(&(strand.len() as i32).to_le_bytes());
+        for c in strand.iter().flatten() {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.path("roots.data"), bytes).unwrap();
+    dir.run_ok(&["convert", "roots.data", "roots.glb"]);
+    let summary = dir.inspect("roots.glb");
+    assert_eq!(summary["strands"], 4, "{summary}");
+    assert_eq!(summary["single_point_strands"], 2, "{summary}");
+    hand_to_validators(
+        &dir.path("roots.glb"),
+        "formats_empty_roots",
+        json!({"kind": "gltf", "primitives": 1, "vertices": 7}),
+    );
+}
