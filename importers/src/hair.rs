@@ -90,7 +90,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
             bytes.len(),
             format!(
                 "file too short: the header announces {hair_count} hairs and {point_count} points \
-                 (flags {flags:#x}), {needed} bytes of arrays after the header, but the file has {}",
+                 (flags {flags:#x}), {needed} bytes of arrays after the header, but only {} bytes follow it",
                 cursor.remaining()
             ),
         ));
