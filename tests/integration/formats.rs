@@ -99,7 +99,12 @@ fn animated_glb_round_trips_its_frames() {
         "--seed",
         "7",
     ]);
-    let groom = importers::read(&dir.path("wavy.glb")).unwrap();
+    let mut groom = importers::read(&dir.path("wavy.glb")).unwrap();
+    // An integer per strand: written as 16-bit `_STRAND_ID`, read back per vertex.
+    groom.set_attribute(groom::Attribute::per_strand(
+        "strand_id",
+        groom::AttributeValues::Int((0..20).map(|i| i * 1000 - 5000).collect()),
+    ));
     // Twelve frames of a sway, streamed through the library's frame writer.
     let frames: Vec<Frame> = (0..12)
         .map(|k| Frame {
@@ -129,6 +134,12 @@ fn animated_glb_round_trips_its_frames() {
     for file in ["sway.glb", "again.glb"] {
         let back = importers::read(&dir.path(file)).unwrap();
         assert_eq!(back.strand_vertex_counts, groom.strand_vertex_counts);
+        let Some(groom::AttributeValues::Int(ids)) = back.attribute("strand_id").map(|a| &a.values)
+        else {
+            panic!("{file}: no integer strand_id attribute");
+        };
+        let last = groom.vertex_count() - 1;
+        assert_eq!((ids[0], ids[last]), (-5000, 14000), "{file}");
         assert_eq!(back.frames.len(), frames.len(), "{file}");
         for (k, (expected, got)) in frames.iter().zip(&back.frames).enumerate() {
             assert!((expected.time - got.time).abs() < 1e-6, "{file} frame {k}");
