@@ -11,6 +11,7 @@
 //! Accessors are read by this module, not the crate's reader, so that every
 //! range is checked against the buffer before it is read.
 
+use crate::mesh::Triangles;
 use crate::{ImportError, Place};
 use base64::Engine;
 use gltf::accessor::{DataType, Dimensions};
@@ -27,6 +28,13 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 }
 
 type Matrix = [[f32; 4]; 4];
+
+const IDENTITY: Matrix = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
 
 /// The most points all frames together may have (3 GiB of coordinates).
 const MAX_FRAME_POINTS: u64 = 1 << 28;
@@ -50,74 +58,9 @@ struct Piece {
 }
 
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
-    let document = gltf::Gltf::from_slice(bytes).map_err(|e| crate_error(path, e))?;
-    let mut reader = Reader {
-        path,
-        buffers: Vec::new(),
-    };
-    for buffer in document.buffers() {
-        let place = Place::Path(format!("/buffers/{}", buffer.index()));
-        let data = match buffer.source() {
-            gltf::buffer::Source::Bin => document.blob.clone().ok_or_else(|| {
-                ImportError::malformed(
-                    path,
-                    place.clone(),
-                    "refers to a GLB BIN chunk, but there is none",
-                )
-            })?,
-            gltf::buffer::Source::Uri(uri) => load_uri(path, &place, uri)?,
-        };
-        if data.len() < buffer.length() {
-            return Err(ImportError::malformed(
-                path,
-                place,
-                format!(
-                    "byteLength is {} but the data has {} bytes",
-                    buffer.length(),
-                    data.len()
-                ),
-            ));
-        }
-        reader.buffers.push(data);
-    }
-
+    let (document, reader) = load(path, bytes)?;
     let mut pieces = Vec::new();
-    let roots: Vec<gltf::Node> = match document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
-        Some(scene) => scene.nodes().collect(),
-        None => Vec::new(),
-    };
-    let identity: Matrix = [
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
-    // Depth-first over the scene graph; the depth bound guards against a
-    // cycle the validation might let through.
-    let mut stack: Vec<(gltf::Node, Matrix, usize)> =
-        roots.into_iter().rev().map(|n| (n, identity, 0)).collect();
-    let mut visits = 0usize;
-    while let Some((node, parent, depth)) = stack.pop() {
-        // Nodes shared by several parents could make the walk exponential.
-        visits += 1;
-        if visits > 1 << 20 {
-            return Err(ImportError::malformed(
-                path,
-                Place::Path("/nodes".into()),
-                "scene graph has over a million node instances (nodes shared by many parents?)",
-            ));
-        }
-        if depth > 1024 {
-            return Err(ImportError::malformed(
-                path,
-                Place::Path(format!("/nodes/{}", node.index())),
-                "node hierarchy deeper than 1024 (a cycle?)",
-            ));
-        }
-        let world = multiply(&parent, &node.transform().matrix());
+    walk_scene(path, &document, |node, world| {
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 if let Some(piece) = reader.primitive(&primitive, &mesh, world, node.index())? {
@@ -125,11 +68,8 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
                 }
             }
         }
-        let children: Vec<_> = node.children().collect();
-        for child in children.into_iter().rev() {
-            stack.push((child, world, depth + 1));
-        }
-    }
+        Ok(())
+    })?;
 
     let mut groom = Groom {
         units: Units::METERS,
@@ -175,6 +115,153 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     Ok(groom)
 }
 
+/// Reads the triangles of every TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN
+/// primitive of the scene's meshes, in world coordinates (node transforms
+/// applied; a node that mirrors gets its triangles' winding reversed, as the
+/// glTF specification asks, so they keep facing outwards). Line and point
+/// primitives, morph targets and skins are ignored: a collider is rigid.
+pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    parse_triangles(path, &bytes)
+}
+
+/// The most vertices, and the most triangles, a collider mesh may have once
+/// instanced meshes are expanded (a few shared nodes can multiply a small
+/// file into an enormous mesh).
+const MAX_MESH_VERTICES: usize = 1 << 24;
+const MAX_MESH_TRIANGLES: usize = 1 << 25;
+
+pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    let (document, reader) = load(path, bytes)?;
+    let mut vertices: Vec<[f32; 3]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    // A primitive shared by several nodes is decoded once.
+    let mut decoded: BTreeMap<(usize, usize), Option<Triangles>> = BTreeMap::new();
+    walk_scene(path, &document, |node, world| {
+        let Some(mesh) = node.mesh() else {
+            return Ok(());
+        };
+        for primitive in mesh.primitives() {
+            let local = match decoded.entry((mesh.index(), primitive.index())) {
+                std::collections::btree_map::Entry::Occupied(entry) => entry.into_mut(),
+                std::collections::btree_map::Entry::Vacant(entry) => {
+                    entry.insert(reader.triangles(&primitive, &mesh)?)
+                }
+            };
+            let Some((positions, local_triangles)) = local else {
+                continue;
+            };
+            if vertices.len() + positions.len() > MAX_MESH_VERTICES
+                || triangles.len() + local_triangles.len() > MAX_MESH_TRIANGLES
+            {
+                return Err(ImportError::malformed(
+                    path,
+                    Place::Path(format!("/nodes/{}", node.index())),
+                    format!(
+                        "the scene's triangle meshes exceed {MAX_MESH_VERTICES} vertices or \
+                         {MAX_MESH_TRIANGLES} triangles (meshes instanced by many nodes?)"
+                    ),
+                ));
+            }
+            // Both counts are bounded far below u32::MAX.
+            let base = vertices.len() as u32;
+            let mirrored = determinant(&world) < 0.0;
+            vertices.extend(positions.iter().map(|&p| transform(&world, p)));
+            triangles.extend(local_triangles.iter().map(|&[a, b, c]| {
+                if mirrored {
+                    [base + a, base + c, base + b]
+                } else {
+                    [base + a, base + b, base + c]
+                }
+            }));
+        }
+        Ok(())
+    })?;
+    Ok((vertices, triangles))
+}
+
+/// Parses the JSON (or GLB) and loads every buffer, checking each holds the
+/// bytes its `byteLength` announces.
+fn load<'a>(path: &'a Path, bytes: &[u8]) -> Result<(gltf::Gltf, Reader<'a>), ImportError> {
+    let document = gltf::Gltf::from_slice(bytes).map_err(|e| crate_error(path, e))?;
+    let mut reader = Reader {
+        path,
+        buffers: Vec::new(),
+    };
+    for buffer in document.buffers() {
+        let place = Place::Path(format!("/buffers/{}", buffer.index()));
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => document.blob.clone().ok_or_else(|| {
+                ImportError::malformed(
+                    path,
+                    place.clone(),
+                    "refers to a GLB BIN chunk, but there is none",
+                )
+            })?,
+            gltf::buffer::Source::Uri(uri) => load_uri(path, &place, uri)?,
+        };
+        if data.len() < buffer.length() {
+            return Err(ImportError::malformed(
+                path,
+                place,
+                format!(
+                    "byteLength is {} but the data has {} bytes",
+                    buffer.length(),
+                    data.len()
+                ),
+            ));
+        }
+        reader.buffers.push(data);
+    }
+    Ok((document, reader))
+}
+
+/// Visits every node instance of the default (or first) scene depth-first,
+/// parents before children, with its world matrix.
+fn walk_scene(
+    path: &Path,
+    document: &gltf::Gltf,
+    mut visit: impl FnMut(&gltf::Node, Matrix) -> Result<(), ImportError>,
+) -> Result<(), ImportError> {
+    let roots: Vec<gltf::Node> = match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => scene.nodes().collect(),
+        None => Vec::new(),
+    };
+    // Depth-first over the scene graph; the depth bound guards against a
+    // cycle the validation might let through.
+    let mut stack: Vec<(gltf::Node, Matrix, usize)> =
+        roots.into_iter().rev().map(|n| (n, IDENTITY, 0)).collect();
+    let mut visits = 0usize;
+    while let Some((node, parent, depth)) = stack.pop() {
+        // Nodes shared by several parents could make the walk exponential.
+        visits += 1;
+        if visits > 1 << 20 {
+            return Err(ImportError::malformed(
+                path,
+                Place::Path("/nodes".into()),
+                "scene graph has over a million node instances (nodes shared by many parents?)",
+            ));
+        }
+        if depth > 1024 {
+            return Err(ImportError::malformed(
+                path,
+                Place::Path(format!("/nodes/{}", node.index())),
+                "node hierarchy deeper than 1024 (a cycle?)",
+            ));
+        }
+        let world = multiply(&parent, &node.transform().matrix());
+        visit(&node, world)?;
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world, depth + 1));
+        }
+    }
+    Ok(())
+}
+
 impl Reader<'_> {
     fn error(&self, place: String, message: impl Into<String>) -> ImportError {
         ImportError::malformed(self.path, Place::Path(place), message)
@@ -197,19 +284,7 @@ impl Reader<'_> {
         };
         let positions = self.vec3(&position)?;
         let vertex_count = positions.len();
-        let indices: Vec<usize> = match primitive.indices() {
-            Some(accessor) => {
-                let values = self.integers(&accessor)?;
-                if let Some(bad) = values.iter().find(|&&i| i >= vertex_count) {
-                    return Err(self.error(
-                        format!("/accessors/{}", accessor.index()),
-                        format!("index {bad} is out of range ({vertex_count} vertices)"),
-                    ));
-                }
-                values
-            }
-            None => (0..vertex_count).collect(),
-        };
+        let indices = self.indices(primitive, vertex_count)?;
         let strands = match mode {
             Mode::LineStrip if indices.len() >= 2 => vec![indices],
             Mode::LineStrip => Vec::new(),
@@ -257,6 +332,96 @@ impl Reader<'_> {
             default_weights,
             node,
         }))
+    }
+
+    /// The vertex indices of a primitive, each checked against the vertex
+    /// count; `0..vertex_count` for a primitive without indices.
+    fn indices(
+        &self,
+        primitive: &gltf::Primitive,
+        vertex_count: usize,
+    ) -> Result<Vec<usize>, ImportError> {
+        let Some(accessor) = primitive.indices() else {
+            return Ok((0..vertex_count).collect());
+        };
+        let values = self.integers(&accessor)?;
+        if let Some(bad) = values.iter().find(|&&i| i >= vertex_count) {
+            return Err(self.error(
+                format!("/accessors/{}", accessor.index()),
+                format!("index {bad} is out of range ({vertex_count} vertices)"),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// The positions and triangles (indices into those positions) of a
+    /// TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive; `None` for other
+    /// modes. Triangles that repeat a vertex (how strips are joined) are left
+    /// out: they have no area.
+    fn triangles(
+        &self,
+        primitive: &gltf::Primitive,
+        mesh: &gltf::Mesh,
+    ) -> Result<Option<Triangles>, ImportError> {
+        let mode = primitive.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            return Ok(None);
+        }
+        let place = format!("/meshes/{}/primitives/{}", mesh.index(), primitive.index());
+        let Some(position) = primitive.get(&Semantic::Positions) else {
+            return Err(self.error(place, "triangle primitive without POSITION"));
+        };
+        let positions = self.vec3(&position)?;
+        if positions.len() > MAX_MESH_VERTICES {
+            return Err(self.error(
+                format!("/accessors/{}", position.index()),
+                format!(
+                    "{} vertices are more than the {MAX_MESH_VERTICES} a collider mesh may have",
+                    positions.len()
+                ),
+            ));
+        }
+        let indices = self.indices(primitive, positions.len())?;
+        let corner = |k: usize| indices.get(k).map_or(0, |&i| i as u32);
+        let mut triangles = Vec::new();
+        match mode {
+            Mode::Triangles => {
+                if indices.len() % 3 != 0 {
+                    return Err(self.error(
+                        place,
+                        format!(
+                            "TRIANGLES primitive with {} vertices (indices), not a multiple of 3",
+                            indices.len()
+                        ),
+                    ));
+                }
+                for k in (0..indices.len()).step_by(3) {
+                    triangles.push([corner(k), corner(k + 1), corner(k + 2)]);
+                }
+            }
+            // glTF 2.0 section 3.7.2.1: strip triangle i is (i, i+1, i+2)
+            // for even i and (i, i+2, i+1) for odd i, so all face one way;
+            // fan triangle i is (i+1, i+2, 0).
+            Mode::TriangleStrip => {
+                for k in 0..indices.len().saturating_sub(2) {
+                    triangles.push(if k % 2 == 0 {
+                        [corner(k), corner(k + 1), corner(k + 2)]
+                    } else {
+                        [corner(k), corner(k + 2), corner(k + 1)]
+                    });
+                }
+            }
+            _ => {
+                for k in 0..indices.len().saturating_sub(2) {
+                    triangles.push([corner(k + 1), corner(k + 2), corner(0)]);
+                }
+            }
+        }
+        triangles.retain(|[a, b, c]| a != b && b != c && a != c);
+        Ok(Some((positions, triangles)))
     }
 
     /// The bytes of each element of an accessor, after checking the whole
@@ -606,6 +771,14 @@ fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
     m
 }
 
+/// Determinant of the linear (upper-left 3x3) part of a transform.
+fn determinant(m: &Matrix) -> f32 {
+    // Column-major: m[column][row].
+    m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2])
+        - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2])
+        + m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2])
+}
+
 fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
     let mut out = [0.0f32; 3];
     for (row, value) in out.iter_mut().enumerate() {
@@ -842,6 +1015,140 @@ mod tests {
     fn percent_escapes() {
         assert_eq!(percent_decode("my%20hair.bin"), "my hair.bin");
         assert_eq!(percent_decode("odd%2"), "odd%2");
+    }
+
+    /// Four vertices of a unit square drawn as TRIANGLES (u8 indices) by a
+    /// translated node and a mirroring node, as a TRIANGLE_STRIP, a
+    /// TRIANGLE_FAN, and a LINE_STRIP that triangle reading skips.
+    fn triangle_scene() -> String {
+        let mut bin = Vec::new();
+        for v in [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0,
+        ] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0, 1, 2, 2, 1, 3, 0, 0]);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let primitive = |mode: u32, indices: &str| {
+            format!(
+                r#"{{"primitives":[{{"mode":{mode},"attributes":{{"POSITION":0}}{indices}}}]}}"#
+            )
+        };
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1,2,3,4]}}],
+            "nodes":[{{"translation":[10,0,0],"mesh":0}},{{"scale":[-1,1,1],"mesh":0}},{{"mesh":1}},{{"mesh":2}},{{"mesh":3}}],
+            "meshes":[{},{},{},{}],
+            "accessors":[
+              {{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+              {{"bufferView":1,"componentType":5121,"count":6,"type":"SCALAR"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":6}}],
+            "buffers":[{{"byteLength":56,"uri":"data:application/octet-stream;base64,{payload}"}}]}}"#,
+            primitive(4, r#","indices":1"#),
+            primitive(5, ""),
+            primitive(6, ""),
+            primitive(3, ""),
+        )
+    }
+
+    fn normal_z(vertices: &[[f32; 3]], [a, b, c]: [u32; 3]) -> f32 {
+        let (a, b, c) = (
+            vertices[a as usize],
+            vertices[b as usize],
+            vertices[c as usize],
+        );
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    }
+
+    #[test]
+    fn triangles_of_every_mode_with_transforms_and_mirroring() {
+        let json = triangle_scene();
+        let (vertices, triangles) = parse_triangles(Path::new("t.gltf"), json.as_bytes()).unwrap();
+        assert_eq!(vertices.len(), 16);
+        assert_eq!(vertices[1], [11.0, 0.0, 0.0]);
+        assert_eq!(vertices[5], [-1.0, 0.0, 0.0]);
+        assert_eq!(
+            triangles,
+            vec![
+                [0, 1, 2],
+                [2, 1, 3],
+                // Mirrored by scale -1: winding reversed.
+                [4, 6, 5],
+                [6, 7, 5],
+                // Strip: odd triangles swap their last two corners.
+                [8, 9, 10],
+                [9, 11, 10],
+                // Fan around the first vertex.
+                [13, 14, 12],
+                [14, 15, 12],
+            ]
+        );
+        // The mirrored copies still face +z, like the originals.
+        for &t in &triangles[..6] {
+            assert!(normal_z(&vertices, t) > 0.0, "{t:?}");
+        }
+        // Strokes are no triangles; the curve reader still finds the line.
+        let groom = parse(Path::new("t.gltf"), json.as_bytes()).unwrap();
+        assert_eq!(groom.strand_vertex_counts, vec![4]);
+    }
+
+    #[test]
+    fn malformed_triangles_name_the_place() {
+        let json = triangle_scene();
+        let cases = [
+            (
+                r#""componentType":5121,"count":6"#,
+                r#""componentType":5121,"count":5"#,
+                "t.gltf:/meshes/0/primitives/0: TRIANGLES primitive with 5 vertices",
+            ),
+            (
+                r#""count":4,"type":"VEC3""#,
+                r#""count":40,"type":"VEC3""#,
+                "t.gltf:/accessors/0: 40 elements",
+            ),
+            (
+                r#""componentType":5121,"count":6,"type":"SCALAR""#,
+                r#""componentType":5126,"count":1,"type":"SCALAR""#,
+                "t.gltf:/accessors/1: indices are not unsigned integers",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let bad = json.replacen(from, to, 1);
+            assert_ne!(bad, json);
+            let e = parse_triangles(Path::new("t.gltf"), bad.as_bytes())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
+        // Index 3 becomes 9, past the four vertices.
+        let mut bin = Vec::new();
+        for v in [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0,
+        ] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+        let good = base64::engine::general_purpose::STANDARD
+            .encode([&bin[..], &[0, 1, 2, 2, 1, 3, 0, 0]].concat());
+        let bad = base64::engine::general_purpose::STANDARD
+            .encode([&bin[..], &[0, 1, 2, 2, 1, 9, 0, 0]].concat());
+        let json = json.replacen(&good, &bad, 1);
+        let e = parse_triangles(Path::new("t.gltf"), json.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.gltf:/accessors/1: index 9 is out of range (4 vertices)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn every_cut_of_the_pillow_sample_is_an_error() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/pillow.glb");
+        let glb = std::fs::read(&path).unwrap();
+        let (vertices, triangles) = parse_triangles(&path, &glb).unwrap();
+        assert_eq!((vertices.len(), triangles.len()), (8, 12));
+        for cut in 0..glb.len() {
+            assert!(parse_triangles(&path, &glb[..cut]).is_err(), "cut {cut}");
+        }
     }
 
     #[test]

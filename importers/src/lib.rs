@@ -8,6 +8,7 @@ mod binary;
 pub mod data;
 pub mod gltf;
 pub mod hair;
+pub mod mesh;
 pub mod obj;
 
 use groom::Groom;

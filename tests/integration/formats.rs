@@ -2,7 +2,7 @@
 //! USC-HairSalon/cyHair files, lossless `.hair`, glTF handed to the Khronos
 //! validator, animated glTF round trips, and truncated input.
 
-use crate::util::{hand_to_validators, shared_data, TestDir};
+use crate::util::{hand_to_validators, sample, shared_data, TestDir};
 use groom::Frame;
 use serde_json::json;
 
@@ -239,5 +239,18 @@ fn empty_roots_of_data_survive_glb() {
         &dir.path("roots.glb"),
         "formats_empty_roots",
         json!({"kind": "gltf", "primitives": 1, "vertices": 7}),
+    );
+}
+
+#[test]
+fn collider_samples_load_and_the_pillow_goes_to_the_validator() {
+    let (head_vertices, head) = importers::mesh::read_triangles(&sample("head.obj")).unwrap();
+    assert_eq!((head_vertices.len(), head.len()), (642, 1280));
+    let (pillow_vertices, pillow) = importers::mesh::read_triangles(&sample("pillow.glb")).unwrap();
+    assert_eq!((pillow_vertices.len(), pillow.len()), (8, 12));
+    hand_to_validators(
+        &sample("pillow.glb"),
+        "formats_pillow_sample",
+        json!({"kind": "gltf", "primitives": 1, "vertices": 8}),
     );
 }
