@@ -340,10 +340,21 @@ fn static_formats_refuse_animation() {
 #[test]
 fn hair_refuses_strands_it_cannot_hold() {
     let dir = Scratch::new();
-    let groom = Groom::from_strands([vec![[0.0f32, 0.0, 0.0]; 70_000]]);
-    let error = write(&dir.path("long.hair"), &groom).unwrap_err();
+    // Strands of one length fit the header's u32 default segment count...
+    let long = Groom::from_strands(vec![vec![[0.0f32, 0.0, 0.0]; 70_000]; 2]);
+    write(&dir.path("long.hair"), &long).unwrap();
+    let back = importers::read(&dir.path("long.hair")).unwrap();
+    assert_eq!(back.strand_vertex_counts, vec![70_000; 2]);
+    // ...but the segments array holds at most 65536 points per strand.
+    let mut mixed = long.clone();
+    mixed.strand_vertex_counts = vec![70_000, 69_999, 1];
+    let error = write(&dir.path("mixed.hair"), &mixed).unwrap_err();
     assert!(matches!(error, ExportError::Invalid { .. }), "{error}");
-    assert!(dir.files().is_empty());
+    assert!(
+        error.to_string().contains("strand 0 has 70000 points"),
+        "{error}"
+    );
+    assert_eq!(dir.files(), vec!["long.hair".to_string()]);
 }
 
 #[test]

@@ -254,3 +254,45 @@ fn collider_samples_load_and_the_pillow_goes_to_the_validator() {
         json!({"kind": "gltf", "primitives": 1, "vertices": 8}),
     );
 }
+
+/// A `.hair` file whose header the general rule would not write: uniform
+/// strands with a segments array, a default segment count that is unused,
+/// non-standard default thickness and colour without arrays, bytes after the
+/// info text's NUL.
+fn unusual_hair() -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend_from_slice(b"HAIR");
+    for word in [2u32, 6, 1 | 2, 77] {
+        b.extend_from_slice(&word.to_le_bytes());
+    }
+    for value in [0.5f32, 0.0, 0.25, 0.5, 0.75] {
+        b.extend_from_slice(&value.to_le_bytes());
+    }
+    let mut info = [0u8; 88];
+    info[..7].copy_from_slice(b"unusual");
+    info[80..].copy_from_slice(b"leftover");
+    b.extend_from_slice(&info);
+    b.extend_from_slice(&[2, 0, 2, 0]);
+    for k in 0..18 {
+        b.extend_from_slice(&(k as f32 * 0.5).to_le_bytes());
+    }
+    b
+}
+
+#[test]
+fn unusual_hair_header_survives_convert_byte_for_byte() {
+    let dir = TestDir::new();
+    std::fs::write(dir.path("unusual.hair"), unusual_hair()).unwrap();
+    dir.run_ok(&["convert", "unusual.hair", "copy.hair"]);
+    assert!(std::fs::read(dir.path("copy.hair")).unwrap() == unusual_hair());
+    // Through glTF the header is gone: the general rule writes the arrays.
+    dir.run_ok(&["convert", "unusual.hair", "unusual.glb", "--units", "m"]);
+    dir.run_ok(&["convert", "unusual.glb", "back.hair", "--units", "cm"]);
+    let back = importers::read(&dir.path("back.hair")).unwrap();
+    let original = importers::read(&dir.path("unusual.hair")).unwrap();
+    assert_eq!(back.strand_vertex_counts, original.strand_vertex_counts);
+    assert_eq!(
+        back.attribute("width").unwrap().values,
+        original.attribute("width").unwrap().values
+    );
+}
