@@ -6,7 +6,11 @@
 //! transforms are applied. Morph-target animation becomes frames: frame k is
 //! the base pose plus the targets weighted by the k-th keyframe of the
 //! `weights` sampler. `_NAME` vertex attributes come back as attributes named
-//! `name` (lower case). glTF is metres and Y up.
+//! `name` (lower case), unless the accessor's `extras.groombake` (written by
+//! groombake's exporter) gives the name, says the attribute is per strand
+//! (taken from each strand's first vertex, if every strand's values agree),
+//! or says float or split-u16 values are 32-bit integers. glTF is metres and
+//! Y up.
 //!
 //! Accessors are read by this module, not the crate's reader, so that every
 //! range is checked against the buffer before it is read.
@@ -19,7 +23,7 @@ use gltf::animation::{Interpolation, Property};
 use gltf::mesh::Mode;
 use gltf::Semantic;
 use groom::{Attribute, AttributeValues, Frame, Groom, Units, UpAxis};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
@@ -51,6 +55,8 @@ struct Piece {
     positions: Vec<[f32; 3]>,
     world: Matrix,
     attributes: BTreeMap<String, AttributeValues>,
+    /// Attributes marked per strand whose values agree along every strand.
+    per_strand: BTreeSet<String>,
     /// Position deltas of each morph target.
     targets: Vec<Vec<[f32; 3]>>,
     default_weights: Vec<f32>,
@@ -93,6 +99,11 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         });
     }
     let mut attributes = common.unwrap_or_default();
+    let per_strand: BTreeSet<String> = attributes
+        .keys()
+        .filter(|name| pieces.iter().all(|p| p.per_strand.contains(*name)))
+        .cloned()
+        .collect();
     for piece in &pieces {
         for strand in &piece.strands {
             groom.strand_vertex_counts.push(strand.len() as u32);
@@ -102,13 +113,22 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
             }
             for (name, values) in attributes.iter_mut() {
                 if let Some(source) = piece.attributes.get(name) {
-                    append_selected(values, source, strand);
+                    let selected = if per_strand.contains(name) {
+                        &strand[..strand.len().min(1)]
+                    } else {
+                        strand
+                    };
+                    append_selected(values, source, selected);
                 }
             }
         }
     }
     for (name, values) in attributes {
-        groom.attributes.push(Attribute::new(name, values));
+        groom.attributes.push(if per_strand.contains(&name) {
+            Attribute::per_strand(name, values)
+        } else {
+            Attribute::new(name, values)
+        });
     }
     groom.frames = reader.frames(&document, &pieces)?;
     groom.provenance.format = "gltf".into();
@@ -291,6 +311,7 @@ impl Reader<'_> {
             _ => chain_segments(&indices),
         };
         let mut attributes = BTreeMap::new();
+        let mut per_strand = BTreeSet::new();
         for (semantic, accessor) in primitive.attributes() {
             let Semantic::Extras(name) = semantic else {
                 continue;
@@ -304,9 +325,27 @@ impl Reader<'_> {
                     ),
                 ));
             }
-            if let Some(values) = self.attribute(&accessor)? {
-                attributes.insert(name.to_lowercase(), values);
+            let marker = Marker::of(&accessor);
+            // A marker that does not fit the accessor is ignored.
+            let split = match marker.split_int {
+                true => self.split_integers(&accessor)?,
+                false => None,
+            };
+            let values = match split {
+                Some(values) => Some(values),
+                None => self.attribute(&accessor)?,
+            };
+            let Some(mut values) = values else {
+                continue;
+            };
+            if marker.int {
+                values = integers_if_exact(values);
             }
+            let name = marker.name.unwrap_or_else(|| name.to_lowercase());
+            if marker.strand && constant_along(&values, &strands) {
+                per_strand.insert(name.clone());
+            }
+            attributes.insert(name, values);
         }
         let mut targets = Vec::new();
         for target in primitive.morph_targets() {
@@ -328,6 +367,7 @@ impl Reader<'_> {
             positions,
             world,
             attributes,
+            per_strand,
             targets,
             default_weights,
             node,
@@ -550,6 +590,26 @@ impl Reader<'_> {
         Ok(self
             .scalar_integers(accessor)?
             .map(|values| AttributeValues::Int(values.into_iter().map(|v| v as i32).collect())))
+    }
+
+    /// A VEC2 UNSIGNED_SHORT accessor holding 32-bit integers (low half
+    /// first); `None` if the accessor is not of that type.
+    fn split_integers(
+        &self,
+        accessor: &gltf::Accessor,
+    ) -> Result<Option<AttributeValues>, ImportError> {
+        if accessor.data_type() != DataType::U16
+            || accessor.dimensions() != Dimensions::Vec2
+            || accessor.normalized()
+        {
+            return Ok(None);
+        }
+        let values = self
+            .elements(accessor)?
+            .into_iter()
+            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        Ok(Some(AttributeValues::Int(values)))
     }
 
     /// Frames from the first animation that drives morph-target weights.
@@ -787,6 +847,68 @@ fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
     out
 }
 
+/// What groombake's exporter keeps in an attribute accessor's
+/// `extras.groombake`; all unset for other files.
+#[derive(Default)]
+struct Marker {
+    name: Option<String>,
+    strand: bool,
+    int: bool,
+    split_int: bool,
+}
+
+impl Marker {
+    fn of(accessor: &gltf::Accessor) -> Marker {
+        let Some(raw) = accessor.extras() else {
+            return Marker::default();
+        };
+        let Ok(extras) = serde_json::from_str::<serde_json::Value>(raw.get()) else {
+            return Marker::default();
+        };
+        let marker = &extras["groombake"];
+        Marker {
+            name: marker["name"]
+                .as_str()
+                .filter(|name| !name.is_empty())
+                .map(String::from),
+            strand: marker["scope"] == "strand",
+            int: marker["type"] == "int",
+            split_int: marker["encoding"] == "i32_as_u16x2",
+        }
+    }
+}
+
+/// Float values that are all whole numbers in i32's range become integers.
+fn integers_if_exact(values: AttributeValues) -> AttributeValues {
+    match values {
+        AttributeValues::Float(floats)
+            if floats
+                .iter()
+                .all(|&v| v.fract() == 0.0 && v >= i32::MIN as f32 && v < i32::MAX as f32) =>
+        {
+            AttributeValues::Int(floats.into_iter().map(|v| v as i32).collect())
+        }
+        other => other,
+    }
+}
+
+/// Whether every strand's vertices (indices into `values`) hold one value.
+fn constant_along(values: &AttributeValues, strands: &[Vec<usize>]) -> bool {
+    fn constant<T: PartialEq>(values: &[T], strands: &[Vec<usize>]) -> bool {
+        strands.iter().all(|strand| {
+            let mut picked = strand.iter().map(|&i| values.get(i));
+            let first = picked.next().flatten();
+            first.is_some() && picked.all(|v| v == first)
+        })
+    }
+    match values {
+        AttributeValues::Float(v) => constant(v, strands),
+        AttributeValues::Vec2(v) => constant(v, strands),
+        AttributeValues::Vec3(v) => constant(v, strands),
+        AttributeValues::Int(v) => constant(v, strands),
+    }
+}
+
 fn empty_like(values: &AttributeValues) -> AttributeValues {
     match values {
         AttributeValues::Float(_) => AttributeValues::Float(Vec::new()),
@@ -982,6 +1104,52 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(error.contains("/buffers/0: bad base64"), "{error}");
+    }
+
+    #[test]
+    fn extras_markers_name_scope_and_type_attributes() {
+        let (_, bin) = hand_made(None);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let (json, _) = hand_made(Some(&format!(
+            "data:application/octet-stream;base64,{payload}"
+        )));
+        let marked = |json: &str, extras: &str| {
+            // The two _WIDTH accessors (1 and 7): the only SCALAR FLOAT
+            // accessors of three elements and of four.
+            json.replacen(
+                r#""count":3,"type":"SCALAR"}"#,
+                &format!(r#""count":3,"type":"SCALAR","extras":{extras}}}"#),
+                1,
+            )
+            .replacen(
+                r#""componentType":5126,"count":4,"type":"SCALAR"}"#,
+                &format!(r#""componentType":5126,"count":4,"type":"SCALAR","extras":{extras}}}"#),
+                1,
+            )
+        };
+        // The strip's widths differ along its strand: the per-strand marker
+        // is not honoured, the name is.
+        let json_marked = marked(&json, r#"{"groombake":{"name":"Width","scope":"strand"}}"#);
+        assert_ne!(json_marked, json);
+        let groom = parse(Path::new("t.gltf"), json_marked.as_bytes()).unwrap();
+        let width = groom.attribute("Width").unwrap();
+        assert_eq!(width.scope, groom::Scope::Vertex);
+        assert_eq!(width.values.len(), 7);
+        // Fractional floats marked int stay floats; a split encoding on a
+        // FLOAT accessor is ignored; unknown extras are harmless.
+        for extras in [
+            r#"{"groombake":{"type":"int","encoding":"i32_as_u16x2"}}"#,
+            r#"{"groombake":7}"#,
+            r#"[1,2]"#,
+        ] {
+            let json_marked = marked(&json, extras);
+            let groom = parse(Path::new("t.gltf"), json_marked.as_bytes()).unwrap();
+            assert_eq!(
+                groom.attribute("width").unwrap().values,
+                AttributeValues::Float(vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
+                "{extras}"
+            );
+        }
     }
 
     #[test]

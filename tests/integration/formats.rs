@@ -100,7 +100,7 @@ fn animated_glb_round_trips_its_frames() {
         "7",
     ]);
     let mut groom = importers::read(&dir.path("wavy.glb")).unwrap();
-    // An integer per strand: written as 16-bit `_STRAND_ID`, read back per vertex.
+    // An integer per strand: written as 16-bit `_STRAND_ID`, marked per strand.
     groom.set_attribute(groom::Attribute::per_strand(
         "strand_id",
         groom::AttributeValues::Int((0..20).map(|i| i * 1000 - 5000).collect()),
@@ -134,12 +134,13 @@ fn animated_glb_round_trips_its_frames() {
     for file in ["sway.glb", "again.glb"] {
         let back = importers::read(&dir.path(file)).unwrap();
         assert_eq!(back.strand_vertex_counts, groom.strand_vertex_counts);
-        let Some(groom::AttributeValues::Int(ids)) = back.attribute("strand_id").map(|a| &a.values)
-        else {
-            panic!("{file}: no integer strand_id attribute");
-        };
-        let last = groom.vertex_count() - 1;
-        assert_eq!((ids[0], ids[last]), (-5000, 14000), "{file}");
+        for name in ["strand_id", "root_uv"] {
+            assert_eq!(
+                back.attribute(name),
+                groom.attribute(name),
+                "{file}: {name}"
+            );
+        }
         assert_eq!(back.frames.len(), frames.len(), "{file}");
         for (k, (expected, got)) in frames.iter().zip(&back.frames).enumerate() {
             assert!((expected.time - got.time).abs() < 1e-6, "{file} frame {k}");
@@ -294,5 +295,41 @@ fn unusual_hair_header_survives_convert_byte_for_byte() {
     assert_eq!(
         back.attribute("width").unwrap().values,
         original.attribute("width").unwrap().values
+    );
+}
+
+#[test]
+fn per_strand_and_wide_integer_attributes_survive_glb_and_validate() {
+    use groom::{Attribute, AttributeValues, Groom, Scope};
+    let dir = TestDir::new();
+    let mut groom = Groom::from_strands([
+        vec![[0.0, 0.0, 0.0], [0.0, 0.1, 0.0]],
+        vec![[0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.1, 0.2, 0.0]],
+    ]);
+    groom.units = groom::Units::METERS;
+    groom.set_attribute(Attribute::per_strand(
+        "Clump ID",
+        AttributeValues::Int(vec![i32::MIN, 1 << 30]),
+    ));
+    groom.set_attribute(Attribute::per_strand(
+        "Root_UV",
+        AttributeValues::Vec2(vec![[0.25, 0.5], [0.75, 1.0]]),
+    ));
+    let path = dir.path("attributes.glb");
+    exporters::write(&path, &groom).unwrap();
+    // Through the binary too: convert keeps what the importer rebuilt.
+    dir.run_ok(&["convert", "attributes.glb", "again.gltf"]);
+    for file in ["attributes.glb", "again.gltf"] {
+        let back = importers::read(&dir.path(file)).unwrap();
+        for attribute in &groom.attributes {
+            let got = back.attribute(&attribute.name).unwrap();
+            assert_eq!(got.scope, Scope::Strand, "{file}: {}", attribute.name);
+            assert_eq!(got.values, attribute.values, "{file}: {}", attribute.name);
+        }
+    }
+    hand_to_validators(
+        &path,
+        "formats_strand_attributes",
+        json!({"kind": "gltf", "primitives": 1, "vertices": 5}),
     );
 }
