@@ -2,7 +2,8 @@
 //! `gltf` crate, which parses and validates the JSON. Strands are read from
 //! `LINE_STRIP` primitives (one strand each) and `LINES` primitives
 //! (consecutive segments that share an end vertex join into one strand);
-//! other primitives (a head mesh, points) are skipped. The scene graph's
+//! other primitives (a head mesh, points) are skipped by [`read`];
+//! [`read_triangles`] reads the triangle primitives instead, for colliders. The scene graph's
 //! transforms are applied. Morph-target animation becomes frames: frame k is
 //! the base pose plus the targets weighted by the k-th keyframe of the
 //! `weights` sampler. `_NAME` vertex attributes come back as attributes named
