@@ -1,10 +1,11 @@
 //! One integration binary: each test runs the real `groombake` executable in
 //! a temporary directory (see `util.rs`). Modules group tests by area.
 
-// Helpers outside #[test] functions may panic too: this is test code.
+// A test binary: a panic with its message is how a helper reports failure.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod util;
 
 mod cli;
+mod formats;
 mod usd;
