@@ -1,4 +1,4 @@
-//! `.usdc` crate reader (versions 0.4.0 to 0.11.x).
+//! `.usdc` crate reader (versions 0.4.0 and later 0.x).
 //!
 //! Every count and offset read from the file is checked against the bytes
 //! there before it is used; buffers grow with the data actually decoded,
@@ -922,6 +922,9 @@ impl<'a> CrateReader<'a> {
                     }
                     _ => {}
                 }
+            }
+            if prim.in_variant && stage.notes.is_empty() {
+                stage.notes.push("variant sets not applied".into());
             }
             prim_of_path.insert(path, stage.prims.len());
             stage.prims.push(prim);

@@ -137,6 +137,8 @@ pub(crate) struct Stage {
     pub time_codes_per_second: Option<f64>,
     pub frames_per_second: Option<f64>,
     pub prims: Vec<Prim>,
+    /// What the reader passed over (variant sets), for the groom's info.
+    pub notes: Vec<String>,
 }
 
 /// What an element of a USD value type holds.
@@ -843,7 +845,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
     let mut basis_codes = Vec::new();
-    let mut notes = Vec::new();
+    let mut notes = stage.notes.clone();
     for (group, (path, set)) in sets.into_iter().enumerate() {
         let vertices_before = groom.points.len();
         let strands_before = groom.strand_vertex_counts.len();

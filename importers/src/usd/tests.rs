@@ -377,6 +377,9 @@ def Xform "A" (
         }
     }
     rel material:binding = </M>
+    prepend rel proxyPrim = </P>
+    reorder properties = ["b", "a"]
+    custom float3 a.connect = </X.y>
     def BasisCurves "Real" {
         int[] curveVertexCounts = [3]
         point3f[] points = [(0, 0, 0), (1, 1, 1), (2, 2, 2)]
@@ -388,7 +391,13 @@ def Xform "A" (
 }
 "#;
     let groom = read_str(text).unwrap();
+    // usd-core would select variant "x"; this importer applies no variants
+    // and says so.
     assert_eq!(groom.strand_vertex_counts, vec![3]);
+    assert!(groom
+        .provenance
+        .info
+        .contains("/A: variant set 'v' not applied"));
     assert!(groom.attribute("group_id").is_none());
     assert_eq!(
         groom.units,

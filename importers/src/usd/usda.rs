@@ -572,7 +572,9 @@ impl<'a> Parser<'a> {
                     self.prim(specifier, Some(index), in_variant, depth + 1, at)?;
                 }
                 Token::Ident("variantSet") => self.variant_set(index, depth, at)?,
-                Token::Ident("reorder") => {
+                Token::Ident("reorder")
+                    if matches!(self.peek()?, Token::Ident("nameChildren" | "properties")) =>
+                {
                     self.next()?;
                     self.expect(b'=')?;
                     self.generic_value(0)?;
@@ -596,12 +598,17 @@ impl<'a> Parser<'a> {
             return Err(self.error(at, "variants nested too deeply"));
         }
         let (name, name_at) = self.next()?;
-        if !matches!(name, Token::Text(_)) {
+        let Token::Text(name) = name else {
             return Err(self.error(
                 name_at,
                 format!("expected the variant set's name, found {}", name.describe()),
             ));
-        }
+        };
+        let owner = self.stage.prims.get(index).map(|p| p.path.clone());
+        self.stage.notes.push(format!(
+            "{}: variant set '{name}' not applied",
+            owner.unwrap_or_default()
+        ));
         self.expect(b'=')?;
         self.expect(b'{')?;
         loop {
@@ -628,7 +635,19 @@ impl<'a> Parser<'a> {
     fn property(&mut self, prim: usize, first: &'a str, at: Position) -> Result<(), ImportError> {
         let mut word = first;
         let mut word_at = at;
-        while matches!(word, "custom" | "uniform" | "varying" | "config") {
+        // List edits (`prepend rel ...`) and qualifiers come before the type.
+        while matches!(
+            word,
+            "custom"
+                | "uniform"
+                | "varying"
+                | "config"
+                | "add"
+                | "delete"
+                | "prepend"
+                | "append"
+                | "reorder"
+        ) {
             let (token, token_at) = self.next()?;
             let Token::Ident(next) = token else {
                 return Err(self.error(
