@@ -314,6 +314,21 @@ pub enum SimError {
     },
 }
 
+/// The benchmark's groom: `strands` straight strands of `vertices`
+/// vertices, 24 cm long, on a scalp cap (metres, Y up).
+pub fn bench_groom(
+    strands: usize,
+    vertices: usize,
+) -> Result<groom::Groom, crate::generate::GeneratorError> {
+    let length = 0.24;
+    crate::generate::generate(&crate::generate::GeneratorParameters {
+        strands,
+        length,
+        segment_length: length / (vertices.max(2) - 1) as f32,
+        ..Default::default()
+    })
+}
+
 /// What a step did besides moving the hair.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct StepReport {

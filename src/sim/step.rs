@@ -7,7 +7,9 @@
 
 use super::bonds::{reform, rest_darboux};
 use super::colliders::{project, PreparedCollider};
-use super::constraints::{bend_twist, follow_the_leader, stretch_shear};
+use super::constraints::{
+    bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
+};
 use super::forces::{blower_dv, EdgeGrid};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
@@ -70,7 +72,8 @@ struct Work {
     w_q: Vec<f32>,
     l: Vec<f32>,
     rest: Vec<V3>,
-    k_prime: Vec<f32>,
+    stretch: Vec<StretchCoefficients>,
+    bend: Vec<[f32; 2]>,
     db: Vec<[f32; 4]>,
     corrections: Vec<V3>,
     v: Vec<V3>,
@@ -89,9 +92,11 @@ impl Work {
         ] {
             v.resize(n, [0.0; 3]);
         }
-        for v in [&mut self.w, &mut self.w_q, &mut self.l, &mut self.k_prime] {
+        for v in [&mut self.w, &mut self.w_q, &mut self.l] {
             v.resize(n, 0.0);
         }
+        self.stretch.resize(n, StretchCoefficients::default());
+        self.bend.resize(n, [0.0; 2]);
         self.q_old.resize(n, math::IDENTITY);
         self.q.resize(n, math::IDENTITY);
         self.db.resize(n, [0.0; 4]);
@@ -357,12 +362,14 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
             };
             work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
         }
+        work.stretch[e] =
+            StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
     }
 
     // Bond-rate changes and (iii) the rest shape from the bonds (15).
     for j in 1..m {
         let joint = &s.joints[j];
-        work.k_prime[j] = joint.stiffness_prime;
+        work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
         let mut db = [0.0f32; 4];
@@ -382,29 +389,31 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
     // then bend/twist of the joint between edges e - 1 and e.
     let colliding = !ctx.colliders.is_empty();
     for _ in 0..ctx.iterations {
-        for e in 0..m {
-            let (pa, pb) = work.p.split_at_mut(e + 1);
-            let (qa, qb) = work.q.split_at_mut(e);
-            stretch_shear(
-                &mut pa[e],
-                &mut pb[0],
-                &mut qb[0],
-                work.w[e],
-                work.w[e + 1],
-                work.w_q[e],
-                work.l[e],
-            );
-            if e > 0 {
-                bend_twist(
-                    &mut qa[e - 1],
-                    &mut qb[0],
-                    work.w_q[e - 1],
-                    work.w_q[e],
-                    work.rest[e],
-                    work.k_prime[e],
-                );
-            }
+        // Register-carried sweep: edge e's stretch/shear, then the bend of
+        // the joint between edges e - 1 and e (Gauss-Seidel, root to tip).
+        let p = &mut work.p[..n];
+        let q = &mut work.q[..m];
+        let stretch = &work.stretch[..m];
+        let bend = &work.bend[..m];
+        let rest = &work.rest[..m];
+        let mut p_a = p[0];
+        let mut p_b = p[1];
+        let mut q_prev = q[0];
+        stretch_shear(&mut p_a, &mut p_b, &mut q_prev, &stretch[0]);
+        p[0] = p_a;
+        p_a = p_b;
+        for e in 1..m {
+            let mut p_b = p[e + 1];
+            let mut q_e = q[e];
+            stretch_shear(&mut p_a, &mut p_b, &mut q_e, &stretch[e]);
+            bend_twist(&mut q_prev, &mut q_e, rest[e], bend[e]);
+            p[e] = p_a;
+            q[e - 1] = q_prev;
+            p_a = p_b;
+            q_prev = q_e;
         }
+        p[m] = p_a;
+        q[m - 1] = q_prev;
         if colliding {
             for i in 1..n {
                 if work.w[i] > 0.0 {
