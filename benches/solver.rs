@@ -2,9 +2,9 @@
 //! 1,000 strands x 32 vertices, 5 iterations, hair-hair off, on 1 and 2
 //! threads. `groombake bench` measures the full 10,000-strand case.
 
-
 // A benchmark harness: a failure to set up is a bug to see at once.
 #![allow(clippy::expect_used)]
+
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use groombake::sim::{
     bench_groom, ColliderSet, Environment, Material, Solver, SolverParameters, StrandSet,
