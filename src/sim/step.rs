@@ -211,18 +211,36 @@ impl Solver {
             root_transform: strands.root_transform,
         };
         let views = split_strands(strands, &active);
+        // Strands go in pairs (see `step_pair`); the pairing is fixed by
+        // strand order, so results do not depend on the thread count.
         let failed: Vec<usize> = views
             .into_par_iter()
-            .with_min_len(16)
-            .map_init(Work::default, |work, view| {
-                let index = view.index;
-                if view.active && !step_strand(&context, view, work) {
-                    Some(index)
-                } else {
-                    None
-                }
-            })
-            .flatten()
+            .chunks(2)
+            .with_min_len(8)
+            .map_init(
+                || (Work::default(), Work::default()),
+                |(wa, wb), mut pair| {
+                    let second = pair.pop();
+                    let first = pair.pop();
+                    let mut failed = [None, None];
+                    match (first, second) {
+                        (Some(a), Some(b)) => {
+                            let (ia, ib) = (a.index, b.index);
+                            let (ok_a, ok_b) = step_pair(&context, a, b, wa, wb);
+                            failed = [(!ok_a).then_some(ia), (!ok_b).then_some(ib)];
+                        }
+                        (None, Some(a)) | (Some(a), None) => {
+                            let index = a.index;
+                            if a.active && !step_strand(&context, a, wa) {
+                                failed[0] = Some(index);
+                            }
+                        }
+                        (None, None) => {}
+                    }
+                    failed
+                },
+            )
+            .flat_map_iter(|f| f.into_iter().flatten())
             .collect();
         for &strand in &failed {
             strands.frozen[strand] = true;
@@ -279,13 +297,11 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
     views
 }
 
-/// One strand's step. Returns false (and commits nothing) when its new
-/// state is not finite.
-fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+/// Fills the working copy: (ii) external forces and predicted positions
+/// and frames, bond-rate changes, (iii) rest shape from the bonds, the
+/// constraint coefficients.
+fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
-    if n < 2 {
-        return true;
-    }
     let m = n - 1;
     work.resize(n);
     let dt = ctx.dt;
@@ -385,43 +401,137 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         work.rest[j] = rest_darboux(omega, &effective, &joint.memories, &ctx.influences);
     }
 
-    // (iv) Constraint iterations, fused per edge: stretch/shear of edge e,
-    // then bend/twist of the joint between edges e - 1 and e.
-    let colliding = !ctx.colliders.is_empty();
-    for _ in 0..ctx.iterations {
-        // Register-carried sweep: edge e's stretch/shear, then the bend of
-        // the joint between edges e - 1 and e (Gauss-Seidel, root to tip).
-        let p = &mut work.p[..n];
-        let q = &mut work.q[..m];
-        let stretch = &work.stretch[..m];
-        let bend = &work.bend[..m];
-        let rest = &work.rest[..m];
-        let mut p_a = p[0];
-        let mut p_b = p[1];
-        let mut q_prev = q[0];
-        stretch_shear(&mut p_a, &mut p_b, &mut q_prev, &stretch[0]);
-        p[0] = p_a;
-        p_a = p_b;
+}
+
+/// Per-strand sweep state carried in registers: the current edge's first
+/// vertex and the previous edge's frame.
+struct Sweep {
+    p_a: V3,
+    q_prev: Quat,
+}
+
+impl Work {
+    /// Stretch/shear of edge 0 (no joint before it).
+    #[inline(always)]
+    fn sweep_begin(&mut self) -> Sweep {
+        let mut p_a = self.p[0];
+        let mut p_b = self.p[1];
+        let mut q_prev = self.q[0];
+        stretch_shear(&mut p_a, &mut p_b, &mut q_prev, &self.stretch[0]);
+        self.p[0] = p_a;
+        Sweep { p_a: p_b, q_prev }
+    }
+
+    /// Edge `e`'s stretch/shear, then the bend of the joint between edges
+    /// `e - 1` and `e` (Gauss-Seidel, root to tip).
+    #[inline(always)]
+    fn sweep_edge(&mut self, e: usize, state: &mut Sweep) {
+        let mut p_b = self.p[e + 1];
+        let mut q_e = self.q[e];
+        stretch_shear(&mut state.p_a, &mut p_b, &mut q_e, &self.stretch[e]);
+        bend_twist(&mut state.q_prev, &mut q_e, self.rest[e], self.bend[e]);
+        self.p[e] = state.p_a;
+        self.q[e - 1] = state.q_prev;
+        state.p_a = p_b;
+        state.q_prev = q_e;
+    }
+
+    #[inline(always)]
+    fn sweep_end(&mut self, m: usize, state: Sweep) {
+        self.p[m] = state.p_a;
+        self.q[m - 1] = state.q_prev;
+    }
+
+    fn sweep(&mut self, m: usize) {
+        let mut state = self.sweep_begin();
         for e in 1..m {
-            let mut p_b = p[e + 1];
-            let mut q_e = q[e];
-            stretch_shear(&mut p_a, &mut p_b, &mut q_e, &stretch[e]);
-            bend_twist(&mut q_prev, &mut q_e, rest[e], bend[e]);
-            p[e] = p_a;
-            q[e - 1] = q_prev;
-            p_a = p_b;
-            q_prev = q_e;
+            self.sweep_edge(e, &mut state);
         }
-        p[m] = p_a;
-        q[m - 1] = q_prev;
-        if colliding {
-            for i in 1..n {
-                if work.w[i] > 0.0 {
-                    work.p[i] = project(ctx.colliders, work.p[i], Some(work.x[i]), ctx.radius, dt);
-                }
+        self.sweep_end(m, state);
+    }
+
+    /// Collision projection with friction after an iteration.
+    fn collide(&mut self, ctx: &Context<'_>, n: usize) {
+        if ctx.colliders.is_empty() {
+            return;
+        }
+        for i in 1..n {
+            if self.w[i] > 0.0 {
+                self.p[i] = project(ctx.colliders, self.p[i], Some(self.x[i]), ctx.radius, ctx.dt);
             }
         }
     }
+}
+
+/// Two strands' sweeps in lockstep: each strand's arithmetic is exactly
+/// that of `Work::sweep`, but the two independent dependency chains
+/// overlap in the processor.
+fn sweep_pair(a: &mut Work, ma: usize, b: &mut Work, mb: usize) {
+    let mut sa = a.sweep_begin();
+    let mut sb = b.sweep_begin();
+    let common = ma.min(mb);
+    for e in 1..common {
+        a.sweep_edge(e, &mut sa);
+        b.sweep_edge(e, &mut sb);
+    }
+    for e in common.max(1)..ma {
+        a.sweep_edge(e, &mut sa);
+    }
+    for e in common.max(1)..mb {
+        b.sweep_edge(e, &mut sb);
+    }
+    a.sweep_end(ma, sa);
+    b.sweep_end(mb, sb);
+}
+
+/// One strand's step. Returns false (and commits nothing) when its new
+/// state is not finite.
+fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+    let n = s.positions.len();
+    if n < 2 {
+        return true;
+    }
+    prepare(ctx, &s, work);
+    // (iv) Constraint iterations (and collisions).
+    for _ in 0..ctx.iterations {
+        work.sweep(n - 1);
+        work.collide(ctx, n);
+    }
+    finish(ctx, s, work)
+}
+
+/// Two strands' steps, their constraint sweeps interleaved; bit-identical
+/// to `step_strand` on each.
+fn step_pair(
+    ctx: &Context<'_>,
+    a: StrandMut<'_>,
+    b: StrandMut<'_>,
+    wa: &mut Work,
+    wb: &mut Work,
+) -> (bool, bool) {
+    let (na, nb) = (a.positions.len(), b.positions.len());
+    if na < 2 || nb < 2 || !a.active || !b.active {
+        let ok_a = !a.active || step_strand(ctx, a, wa);
+        let ok_b = !b.active || step_strand(ctx, b, wb);
+        return (ok_a, ok_b);
+    }
+    prepare(ctx, &a, wa);
+    prepare(ctx, &b, wb);
+    for _ in 0..ctx.iterations {
+        sweep_pair(wa, na - 1, wb, nb - 1);
+        wa.collide(ctx, na);
+        wb.collide(ctx, nb);
+    }
+    (finish(ctx, a, wa), finish(ctx, b, wb))
+}
+
+/// After the iterations: inextensibility, final collisions, velocities,
+/// bond update (17); commits the strand if its new state is finite.
+fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+    let n = s.positions.len();
+    let m = n - 1;
+    let dt = ctx.dt;
+    let colliding = !ctx.colliders.is_empty();
     if ctx.ftl.is_some() {
         follow_the_leader(
             &mut work.p[..n],
