@@ -6,5 +6,6 @@
 
 mod util;
 
+mod bench;
 mod cli;
 mod formats;
