@@ -1,6 +1,7 @@
 //! The command line: argument parsing (clap) and one module per subcommand.
 //! Each subcommand only composes library functions.
 
+mod bench;
 mod convert;
 mod generate;
 mod inspect;
@@ -27,6 +28,8 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Writes a procedural test groom.
     Generate(generate::GenerateArgs),
+    /// Times the solver on a generated groom.
+    Bench(bench::BenchArgs),
 }
 
 /// Bad input or usage: exit code 2.
@@ -52,6 +55,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Generate(a) => generate::run(a),
+        Command::Bench(a) => bench::run(a),
     }
 }
 
