@@ -947,6 +947,7 @@ impl<'a> CrateReader<'a> {
                 default: None,
                 samples: Vec::new(),
                 interpolation: None,
+                element_size: None,
                 place: Place::Path(entry.text.clone()),
             };
             for (field, rep) in fields {
@@ -962,6 +963,12 @@ impl<'a> CrateReader<'a> {
                     }
                     "default" => attribute.default = Some(self.value(rep, &entry.text, 0)?),
                     "timeSamples" => attribute.samples = self.time_samples(rep, &entry.text)?,
+                    "elementSize" => {
+                        attribute.element_size = self
+                            .value(rep, &entry.text, 0)?
+                            .numbers(1)
+                            .and_then(|n| n.first().copied())
+                    }
                     "interpolation" => {
                         attribute.interpolation = self
                             .value(rep, &entry.text, 0)?

@@ -88,6 +88,8 @@ pub(crate) struct UsdAttribute {
     /// `(time code, value)`, as the file lists them.
     pub samples: Vec<(f64, Value)>,
     pub interpolation: Option<String>,
+    /// Values per element of a primvar (`elementSize`), when authored.
+    pub element_size: Option<f64>,
     /// Where the attribute is: line of its declaration or its path.
     pub place: Place,
 }
@@ -601,6 +603,9 @@ fn primvar(
     let Some(value) = attribute.static_value() else {
         return skip("no value");
     };
+    if let Some(size) = attribute.element_size.filter(|&s| s != 1.0) {
+        return skip(&format!("elementSize {size}"));
+    }
     let base_type = attribute.type_name.trim_end_matches("[]");
     let (components, data) = match value {
         Value::Numbers {

@@ -158,6 +158,14 @@ fn reference_files_match_usd_core() {
         assert_eq!(tint.scope, Scope::Strand);
         assert_eq!(tint.values.len(), 21);
         assert_eq!(groom.basis, CurveBasis::Bspline, "{name}");
+        assert!(groom.attribute("pair").is_none(), "{name}");
+        assert!(
+            groom
+                .provenance
+                .info
+                .contains("primvars:pair: elementSize 2"),
+            "{name}"
+        );
         let mut groups = vec![0; 20];
         groups.push(1);
         assert_eq!(
@@ -317,6 +325,13 @@ fn malformed_curves_are_reported_with_their_place() {
     let counts = "#usda 1.0\ndef BasisCurves \"C\" {\n    int[] curveVertexCounts = [2, 2]\n    point3f[] points = [(0, 0, 0), (1, 1, 1), (2, 2, 2)]\n}\n";
     assert!(error_text(counts)
         .starts_with("bad.usda:4:5: points has 3 points but curveVertexCounts add up to 4"));
+    let sized = "#usda 1.0\ndef BasisCurves \"C\" {\n    int[] curveVertexCounts = [2]\n    point3f[] points = [(0, 0, 0), (1, 1, 1)]\n    float[] primvars:pair = [1, 2, 3, 4] (interpolation = \"vertex\"\n        elementSize = 2)\n}\n";
+    let groom = read_str(sized).unwrap();
+    assert!(groom.attribute("pair").is_none());
+    assert!(groom
+        .provenance
+        .info
+        .contains("skipped primvars:pair: elementSize 2"));
     let widths = "#usda 1.0\ndef BasisCurves \"C\" {\n    int[] curveVertexCounts = [2]\n    point3f[] points = [(0, 0, 0), (1, 1, 1)]\n    float[] widths = [1, 2, 3] (interpolation = \"vertex\")\n}\n";
     assert!(error_text(widths)
         .starts_with("bad.usda:5:5: widths has 3 values but vertex interpolation needs 2"));

@@ -723,8 +723,15 @@ impl<'a> Parser<'a> {
             }
         }
         let mut interpolation = None;
+        let mut element_size = None;
         if *self.peek()? == Token::Punct(b'(') {
             for (key, value, meta_at) in self.metadata()? {
+                if key == "elementSize" {
+                    let size = value.numbers(1).and_then(|n| n.first().copied());
+                    element_size = Some(
+                        size.ok_or_else(|| self.error(meta_at, "elementSize must be a number"))?,
+                    );
+                }
                 if key == "interpolation" {
                     let text = value.text().and_then(|t| t.first().cloned());
                     interpolation =
@@ -748,6 +755,9 @@ impl<'a> Parser<'a> {
             if interpolation.is_some() {
                 existing.interpolation = interpolation;
             }
+            if element_size.is_some() {
+                existing.element_size = element_size;
+            }
             return Ok(());
         }
         prim.attributes.push(UsdAttribute {
@@ -760,6 +770,7 @@ impl<'a> Parser<'a> {
             default,
             samples,
             interpolation,
+            element_size,
             place: at.place(),
         });
         Ok(())

@@ -44,6 +44,8 @@ def build(path):
     idx = api.CreatePrimvar("level", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.uniform)
     idx.Set([1.5, 2.5])
     idx.SetIndices(Vt.IntArray([s % 2 for s in range(strands)]))
+    api.CreatePrimvar("pair", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex, 2).Set(
+        [float(i) for i in range(2 * strands * per)])  # elementSize 2: skipped
     second = UsdGeom.BasisCurves.Define(stage, "/Root/Other")
     second.CreateCurveVertexCountsAttr([4])
     second.CreatePointsAttr([Gf.Vec3f(0, 0, i) for i in range(4)])
@@ -74,10 +76,21 @@ def expected(stage):
         })
     return out
 
+def rounded(x):
+    """9 decimals: enough for f32 points, short enough to keep the file small."""
+    if isinstance(x, float):
+        return round(x, 9)
+    if isinstance(x, list):
+        return [rounded(v) for v in x]
+    if isinstance(x, dict):
+        return {k: rounded(v) for k, v in x.items()}
+    return x
+
+
 for ext in ("usdc", "usda"):
     stage = build(f"reference.{ext}")
     with open("reference.json", "w") as f:
-        json.dump(expected(stage), f, separators=(",", ":"))
+        json.dump(rounded(expected(stage)), f, separators=(",", ":"))
 
 # Blender's file as usd-core writes it in crate form (inlined vectors,
 # strings, dictionaries, token arrays).
