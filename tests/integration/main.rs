@@ -6,6 +6,8 @@
 
 mod util;
 
+mod bake;
 mod bench;
 mod cli;
 mod formats;
+mod golden;
