@@ -1,6 +1,7 @@
 //! The command line: argument parsing (clap) and one module per subcommand.
 //! Each subcommand only composes library functions.
 
+mod bake;
 mod bench;
 mod convert;
 mod generate;
@@ -28,6 +29,10 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Writes a procedural test groom.
     Generate(generate::GenerateArgs),
+    /// Runs a timeline of treatments and writes its exports.
+    Bake(bake::BakeArgs),
+    /// Checks a timeline (schema, files, values) without simulating.
+    Validate(bake::ValidateArgs),
     /// Times the solver on a generated groom.
     Bench(bench::BenchArgs),
 }
@@ -55,6 +60,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Generate(a) => generate::run(a),
+        Command::Bake(a) => bake::run_bake(a),
+        Command::Validate(a) => bake::run_validate(a),
         Command::Bench(a) => bench::run(a),
     }
 }

@@ -31,7 +31,7 @@ mod tests;
 pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;
-pub use state::StrandSet;
+pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
 
 use serde::{Deserialize, Serialize};
@@ -288,6 +288,10 @@ pub struct Environment<'a> {
     /// `db = rate * dt` with `b` clamped to [0, 1]: positive re-forms (and
     /// remembers the current shape, (17)), negative breaks.
     pub bond_rate_drive: [f32; 4],
+    /// Per bond kind, a target rate: with `Some(t)` the drive's magnitude
+    /// moves every joint's rate toward `t` (up or down, stopping there);
+    /// with `None` the signed drive applies as it is.
+    pub bond_rate_targets: [Option<f32>; 4],
     /// An extra acceleration per vertex (m/s^2, one per vertex of the
     /// strand set, in its order): the wind hook.
     pub extra_acceleration: Option<&'a [[f32; 3]]>,

@@ -54,6 +54,7 @@ struct Context<'a> {
     ftl: Option<f32>,
     influences: [f32; 4],
     drive: [f32; 4],
+    targets: [Option<f32>; 4],
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
@@ -135,7 +136,12 @@ impl Solver {
                 )));
             }
         }
-        if environment.bond_rate_drive.iter().any(|r| r.is_nan()) {
+        let targets_nan = environment
+            .bond_rate_targets
+            .iter()
+            .flatten()
+            .any(|t| t.is_nan());
+        if environment.bond_rate_drive.iter().any(|r| r.is_nan()) || targets_nan {
             return Err(SimError::Environment("a bond rate drive is NaN".into()));
         }
         if let Some(b) = environment.blower {
@@ -204,6 +210,7 @@ impl Solver {
             },
             influences: strands.influences,
             drive: environment.bond_rate_drive.map(|r| r * dt),
+            targets: environment.bond_rate_targets,
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hair_hair: hair_hair.map(|alpha| (alpha, &self.grid, self.snapshot.as_slice())),
@@ -392,7 +399,12 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         for k in 0..4 {
             let extra = if k == 0 { work.db[j][0] } else { 0.0 };
             let b = joint.rates[k];
-            let target = (b + ctx.drive[k] + extra).clamp(0.0, 1.0);
+            let driven = match ctx.targets[k] {
+                Some(goal) if b < goal => (b + ctx.drive[k].abs()).min(goal),
+                Some(goal) => (b - ctx.drive[k].abs()).max(goal),
+                None => b + ctx.drive[k],
+            };
+            let target = (driven + extra).clamp(0.0, 1.0);
             db[k] = target - b;
             // Breaking acts at once; re-forming takes effect at (v).
             effective[k] = b.min(target);

@@ -6,7 +6,9 @@
 
 mod util;
 
+mod bake;
 mod bench;
 mod cli;
 mod formats;
+mod golden;
 mod usd;
