@@ -6,6 +6,8 @@
 //! [`FrameWriter`] that takes one frame at a time, so memory does not grow
 //! with the number of frames.
 
+pub mod abc;
+
 use groom::{Frame, Groom};
 use std::path::{Path, PathBuf};
 
@@ -36,7 +38,7 @@ impl ExportError {
 }
 
 /// The file extensions the exporters know, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "abc"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +73,8 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
 /// (`.hair`, `.data`, `.obj`) write its points.
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
-    match groom::Units::default() {
+    match extension_of(path).as_str() {
+        "abc" => abc::write(path, groom),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -85,8 +88,18 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
-    let _ = options;
-    Err(ExportError::UnknownFormat {
-        file: path.to_path_buf(),
-    })
+    match extension_of(path).as_str() {
+        "abc" => abc::animated(path, groom, options),
+        _ => Err(ExportError::UnknownFormat {
+            file: path.to_path_buf(),
+        }),
+    }
+}
+
+/// The lower-case extension of a path.
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
 }
