@@ -4,6 +4,8 @@
 //! Every reader checks counts and offsets against the bytes it has before it
 //! allocates or indexes, and reports what is wrong with the file and where.
 
+pub mod abc;
+
 use groom::Groom;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -70,7 +72,7 @@ impl ImportError {
 }
 
 /// The file extensions [`read`] knows, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "abc"];
 
 /// The lower-case extension of a path.
 pub fn extension_of(path: &Path) -> String {
@@ -85,6 +87,7 @@ pub fn extension_of(path: &Path) -> String {
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
     let mut groom: Groom = match extension_of(path).as_str() {
         // One arm per format module, e.g. `"hair" => hair::read(path)?,`.
+        "abc" => abc::read(path)?,
         _ => {
             return Err(ImportError::UnknownFormat {
                 file: path.to_path_buf(),

@@ -245,6 +245,18 @@ impl CurvesExport {
         );
         basis.set_sample(archive, &basis_and_type(groom.basis))?;
         closed.push(basis.close(archive)?);
+        if let Some(uv) = root_uv(groom) {
+            let mut property = PropertyWriter::new(
+                "uv",
+                geom_param_metadata("uni", Pod::F32, 2),
+                PropertyKind::Array,
+                Pod::F32,
+                2,
+                0,
+            );
+            property.set_sample(archive, &f32_bytes(uv.iter().flatten().copied()))?;
+            closed.push(property.close(archive)?);
+        }
         if let Some(width) = width_attribute(groom) {
             if let AttributeValues::Float(values) = &width.values {
                 let scope = scope_code(width.scope);
@@ -259,18 +271,6 @@ impl CurvesExport {
                 property.set_sample(archive, &f32_bytes(values.iter().copied()))?;
                 closed.push(property.close(archive)?);
             }
-        }
-        if let Some(uv) = root_uv(groom) {
-            let mut property = PropertyWriter::new(
-                "uv",
-                geom_param_metadata("uni", Pod::F32, 2),
-                PropertyKind::Array,
-                Pod::F32,
-                2,
-                0,
-            );
-            property.set_sample(archive, &f32_bytes(uv.iter().flatten().copied()))?;
-            closed.push(property.close(archive)?);
         }
         Ok(closed)
     }
@@ -390,9 +390,11 @@ impl CurvesExport {
             self.archive.set_time_sampling(1, sampling);
         }
         let archive = &mut self.archive;
+        // The reference schema's order: bounds, points, topology, then the
+        // geometry parameters.
         let mut geom = vec![
-            self.positions.close(archive).map_err(&io)?,
             self.bounds.close(archive).map_err(&io)?,
+            self.positions.close(archive).map_err(&io)?,
         ];
         geom.append(&mut self.fixed);
         geom.push(
