@@ -208,12 +208,25 @@ impl PropertyWriter {
             }
             self.last_changed = self.next_sample;
         }
-        let sample_digest = match (self.kind, self.previous) {
-            (PropertyKind::Array, Some(previous)) => {
-                dimensions_digest(previous.points, previous.digest)
-            }
-            (_, Some(previous)) => previous.digest,
-            (_, None) => digest,
+        self.fold_previous();
+        Ok(())
+    }
+
+    /// Adds the next sample as a repeat of the previous one (the reference's
+    /// `setFromPreviousSample`): nothing is stored, the hash goes on.
+    pub fn repeat_previous(&mut self) {
+        if self.previous.is_some() {
+            self.fold_previous();
+        }
+    }
+
+    fn fold_previous(&mut self) {
+        let Some(previous) = self.previous else {
+            return;
+        };
+        let sample_digest = match self.kind {
+            PropertyKind::Array => dimensions_digest(previous.points, previous.digest),
+            PropertyKind::Scalar => previous.digest,
         };
         if self.next_sample == 0 {
             self.hash = sample_digest;
@@ -228,7 +241,6 @@ impl PropertyWriter {
             self.hash = [h[0], h[1]];
         }
         self.next_sample += 1;
-        Ok(())
     }
 
     fn push_stored(&mut self, reference: u64) {

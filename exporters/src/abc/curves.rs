@@ -6,9 +6,7 @@
 //! Unreal reads Alembic grooms as centimetres, Y up: the groom is converted
 //! to that before writing.
 
-use super::archive::{
-    metadata, ArchiveWriter, ClosedProperty, Pod, PropertyKind, PropertyWriter, TimeSampling,
-};
+use super::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter, TimeSampling};
 use crate::{AnimationOptions, ExportError, FrameWriter};
 use groom::{AtomicFile, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::{Path, PathBuf};
@@ -79,8 +77,12 @@ pub fn animated(
 struct CurvesExport {
     path: PathBuf,
     archive: ArchiveWriter<AtomicFile>,
-    fixed: Vec<ClosedProperty>,
-    arbitrary: Vec<ClosedProperty>,
+    /// `nVertices`, `curveBasisAndType`, `uv`, `width`: set once, repeated
+    /// for every further frame.
+    fixed: Vec<PropertyWriter>,
+    /// The children of `.arbGeomParams`, likewise.
+    arbitrary: Vec<PropertyWriter>,
+    samples: usize,
     positions: PropertyWriter,
     bounds: PropertyWriter,
     vertex_count: usize,
@@ -183,13 +185,16 @@ impl CurvesExport {
         let mut cm = groom.clone();
         cm.frames.clear();
         cm.convert_to(Units::CENTIMETERS, UpAxis::Y);
-        let fixed = Self::fixed_properties(&mut archive, &cm).map_err(io_error(path))?;
-        let arbitrary = Self::arbitrary_properties(&mut archive, &cm).map_err(io_error(path))?;
+        let fixed =
+            Self::fixed_properties(&mut archive, &cm, animated_sampling).map_err(io_error(path))?;
+        let arbitrary = Self::arbitrary_properties(&mut archive, &cm, animated_sampling)
+            .map_err(io_error(path))?;
         Ok(CurvesExport {
             path: path.to_path_buf(),
             archive,
             fixed,
             arbitrary,
+            samples: 0,
             positions: PropertyWriter::new(
                 "P",
                 metadata(&[("geoScope", "vtx"), ("interpretation", "point")]),
@@ -218,8 +223,9 @@ impl CurvesExport {
     fn fixed_properties(
         archive: &mut ArchiveWriter<AtomicFile>,
         groom: &Groom,
-    ) -> std::io::Result<Vec<ClosedProperty>> {
-        let mut closed = Vec::new();
+        sampling: u32,
+    ) -> std::io::Result<Vec<PropertyWriter>> {
+        let mut open = Vec::new();
         let counts: Vec<u8> = groom
             .strand_vertex_counts
             .iter()
@@ -231,20 +237,20 @@ impl CurvesExport {
             PropertyKind::Array,
             Pod::I32,
             1,
-            0,
+            sampling,
         );
         n_vertices.set_sample(archive, &counts)?;
-        closed.push(n_vertices.close(archive)?);
+        open.push(n_vertices);
         let mut basis = PropertyWriter::new(
             "curveBasisAndType",
             String::new(),
             PropertyKind::Scalar,
             Pod::U8,
             4,
-            0,
+            sampling,
         );
         basis.set_sample(archive, &basis_and_type(groom.basis))?;
-        closed.push(basis.close(archive)?);
+        open.push(basis);
         if let Some(uv) = root_uv(groom) {
             let mut property = PropertyWriter::new(
                 "uv",
@@ -252,10 +258,10 @@ impl CurvesExport {
                 PropertyKind::Array,
                 Pod::F32,
                 2,
-                0,
+                sampling,
             );
             property.set_sample(archive, &f32_bytes(uv.iter().flatten().copied()))?;
-            closed.push(property.close(archive)?);
+            open.push(property);
         }
         if let Some(width) = width_attribute(groom) {
             if let AttributeValues::Float(values) = &width.values {
@@ -266,13 +272,13 @@ impl CurvesExport {
                     PropertyKind::Array,
                     Pod::F32,
                     1,
-                    0,
+                    sampling,
                 );
                 property.set_sample(archive, &f32_bytes(values.iter().copied()))?;
-                closed.push(property.close(archive)?);
+                open.push(property);
             }
         }
-        Ok(closed)
+        Ok(open)
     }
 
     /// The Unreal groom attributes, then every attribute not written as
@@ -280,7 +286,8 @@ impl CurvesExport {
     fn arbitrary_properties(
         archive: &mut ArchiveWriter<AtomicFile>,
         groom: &Groom,
-    ) -> std::io::Result<Vec<ClosedProperty>> {
+        sampling: u32,
+    ) -> std::io::Result<Vec<PropertyWriter>> {
         let strands = groom.strand_count();
         let mut params: Vec<(String, &'static str, AttributeValues)> = vec![
             (
@@ -328,7 +335,7 @@ impl CurvesExport {
                 None => params.push(value),
             }
         }
-        let mut closed = Vec::new();
+        let mut open = Vec::new();
         for (name, scope, values) in params {
             let (pod, extent, bytes) = values_bytes(&values);
             let mut property = PropertyWriter::new(
@@ -337,12 +344,12 @@ impl CurvesExport {
                 PropertyKind::Array,
                 pod,
                 extent,
-                0,
+                sampling,
             );
             property.set_sample(archive, &bytes)?;
-            closed.push(property.close(archive)?);
+            open.push(property);
         }
-        Ok(closed)
+        Ok(open)
     }
 
     /// Points of the groom's units and axis in centimetres, Y up.
@@ -363,6 +370,14 @@ impl CurvesExport {
         self.bounds
             .set_sample(&mut self.archive, &bounds_bytes(points))
             .map_err(io_error(&path))?;
+        // Every property of the schema has a sample per frame; the ones that
+        // do not change are stored once and repeated.
+        if self.samples > 0 {
+            for property in self.fixed.iter_mut().chain(self.arbitrary.iter_mut()) {
+                property.repeat_previous();
+            }
+        }
+        self.samples += 1;
         Ok(())
     }
 
@@ -396,10 +411,16 @@ impl CurvesExport {
             self.bounds.close(archive).map_err(&io)?,
             self.positions.close(archive).map_err(&io)?,
         ];
-        geom.append(&mut self.fixed);
+        for property in std::mem::take(&mut self.fixed) {
+            geom.push(property.close(archive).map_err(&io)?);
+        }
+        let mut arbitrary = Vec::new();
+        for property in std::mem::take(&mut self.arbitrary) {
+            arbitrary.push(property.close(archive).map_err(&io)?);
+        }
         geom.push(
             archive
-                .close_compound(".arbGeomParams", "", std::mem::take(&mut self.arbitrary))
+                .close_compound(".arbGeomParams", "", arbitrary)
                 .map_err(&io)?,
         );
         let geom_metadata = metadata(&[("schema", CURVES_SCHEMA), ("schemaBaseType", GEOM_BASE)]);
@@ -587,6 +608,35 @@ mod tests {
         write(&path, &two_strands()).unwrap();
         let ours = std::fs::read(&path).unwrap();
         let reference = include_bytes!("../../tests/data/reference_static.abc");
+        assert_eq!(object_hashes(&ours), object_hashes(reference));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The animated twin: 4 frames at 24 fps from 0.5 s, poses A, B, A, A
+    /// (a pose written earlier is shared, trailing repeats are not stored).
+    #[test]
+    fn animated_hashes_match_the_alembic_library() {
+        let dir = std::env::temp_dir().join(format!("groombake-abc-anim-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("anim.abc");
+        let groom = two_strands();
+        let pose_a = groom.points.clone();
+        let pose_b: Vec<[f32; 3]> = pose_a.iter().map(|p| [p[0], p[1] + 0.5, p[2]]).collect();
+        let options = AnimationOptions {
+            fps: 24.0,
+            frame_count: 4,
+        };
+        let mut writer = animated(&path, &groom, options).unwrap();
+        for (i, pose) in [&pose_a, &pose_b, &pose_a, &pose_a].into_iter().enumerate() {
+            let frame = Frame {
+                time: 0.5 + i as f64 / 24.0,
+                points: pose.clone(),
+            };
+            writer.write_frame(&frame).unwrap();
+        }
+        writer.finish().unwrap();
+        let ours = std::fs::read(&path).unwrap();
+        let reference = include_bytes!("../../tests/data/reference_animated.abc");
         assert_eq!(object_hashes(&ours), object_hashes(reference));
         std::fs::remove_dir_all(&dir).unwrap();
     }
