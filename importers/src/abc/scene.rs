@@ -167,7 +167,7 @@ pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
     };
     let mut parts = Vec::new();
     reader.walk(&archive.top, &IDENTITY, &mut parts)?;
-    let mut groom = merge(parts)?;
+    let mut groom = merge(parts, &mut reader.budget)?;
     groom.provenance.format = "abc".into();
     let mut info = archive
         .metadata
@@ -341,8 +341,9 @@ impl SceneReader<'_, '_> {
         let counts = self.counts(n_vertices)?;
         let total: u64 = counts.iter().map(|&c| u64::from(c)).sum();
         let basis = self.basis(geom)?;
-        let animated = !(positions.first_changed == 0 && positions.last_changed == 0)
-            && positions.sample_count > 1;
+        // Several samples make frames even when they are all equal: the file
+        // says when they are.
+        let animated = positions.sample_count > 1;
         let sample_count = if animated { positions.sample_count } else { 1 };
         let mut samples = Vec::new();
         let mut times = Vec::new();
@@ -593,7 +594,7 @@ fn append(into: &mut AttributeValues, from: &AttributeValues) {
 
 /// One groom from all Curves objects: strands one object after another;
 /// attributes every object has; frames when any object is animated.
-fn merge(parts: Vec<Part>) -> Result<Groom, Fault> {
+fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
     let mut groom = Groom::default();
     let Some(first) = parts.first() else {
         return Err(Fault::path("/", "the file has no Curves object"));
@@ -622,6 +623,9 @@ fn merge(parts: Vec<Part>) -> Result<Groom, Fault> {
             groom.points.extend_from_slice(points);
         }
     }
+    // Static objects are repeated in every frame of the animated ones.
+    let frame_bytes = groom.points.len().saturating_mul(12);
+    budget.take(frame_bytes.saturating_mul(frame_times.len()), "/")?;
     for (index, &time) in frame_times.iter().enumerate() {
         let mut points = Vec::with_capacity(groom.points.len());
         for part in &parts {
