@@ -3,3 +3,5 @@
 //! these.
 
 pub mod generate;
+pub mod stochastic_wind;
+pub mod timeline;

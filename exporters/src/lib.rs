@@ -7,8 +7,12 @@
 //! with the number of frames.
 
 pub mod abc;
+pub mod data;
+pub mod gltf;
+pub mod hair;
+pub mod obj;
 
-use groom::{Frame, Groom};
+use groom::{AttributeValues, Frame, Groom, Scope};
 use std::path::{Path, PathBuf};
 
 /// Why a file could not be written.
@@ -39,6 +43,9 @@ impl ExportError {
 
 /// The file extensions the exporters know, lower case, without the dot.
 pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "abc"];
+
+/// The extensions of formats that can hold animation.
+pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb", "abc"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,6 +81,10 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
     match extension_of(path).as_str() {
+        "hair" => hair::write(path, groom),
+        "data" => data::write(path, groom),
+        "obj" => obj::write(path, groom),
+        "gltf" | "glb" => gltf::write(path, groom),
         "abc" => abc::write(path, groom),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
@@ -88,18 +99,61 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
+    // glTF keeps frame times in seconds; Alembic needs the frame rate.
     match extension_of(path).as_str() {
+        "gltf" | "glb" => gltf::animated(path, groom),
         "abc" => abc::animated(path, groom, options),
+        "hair" | "data" | "obj" => Err(ExportError::Unsupported {
+            file: path.to_path_buf(),
+            message: "this format holds no animation; write one frame with convert --frame".into(),
+        }),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
     }
 }
 
-/// The lower-case extension of a path.
 fn extension_of(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase()
 }
+
+pub(crate) fn extension_is(path: &Path, extension: &str) -> bool {
+    extension_of(path) == extension
+}
+
+/// A float attribute as one value per vertex (per-strand values repeated on
+/// their strand); `None` when the groom has no float attribute of that name.
+pub(crate) fn vertex_floats(groom: &Groom, name: &str) -> Option<Vec<f32>> {
+    let attribute = groom.attribute(name)?;
+    let AttributeValues::Float(values) = &attribute.values else {
+        return None;
+    };
+    Some(per_vertex(groom, attribute.scope, values))
+}
+
+/// A vec3 attribute as one value per vertex, like [`vertex_floats`].
+pub(crate) fn vertex_vec3s(groom: &Groom, name: &str) -> Option<Vec<[f32; 3]>> {
+    let attribute = groom.attribute(name)?;
+    let AttributeValues::Vec3(values) = &attribute.values else {
+        return None;
+    };
+    Some(per_vertex(groom, attribute.scope, values))
+}
+
+fn per_vertex<T: Copy>(groom: &Groom, scope: Scope, values: &[T]) -> Vec<T> {
+    match scope {
+        Scope::Vertex => values.to_vec(),
+        Scope::Strand => groom
+            .strand_vertex_counts
+            .iter()
+            .zip(values)
+            .flat_map(|(&n, &v)| std::iter::repeat_n(v, n as usize))
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -5,6 +5,11 @@
 //! allocates or indexes, and reports what is wrong with the file and where.
 
 pub mod abc;
+mod binary;
+pub mod data;
+pub mod gltf;
+pub mod hair;
+pub mod obj;
 
 use groom::Groom;
 use std::fmt;
@@ -86,7 +91,10 @@ pub fn extension_of(path: &Path) -> String {
 /// provenance names the file and format.
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
     let mut groom: Groom = match extension_of(path).as_str() {
-        // One arm per format module, e.g. `"hair" => hair::read(path)?,`.
+        "hair" => hair::read(path)?,
+        "data" => data::read(path)?,
+        "obj" => obj::read(path)?,
+        "gltf" | "glb" => gltf::read(path)?,
         "abc" => abc::read(path)?,
         _ => {
             return Err(ImportError::UnknownFormat {
@@ -94,11 +102,8 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
             })
         }
     };
-    #[allow(unreachable_code)]
-    {
-        groom.provenance.source = Some(path.to_path_buf());
-        Ok(groom)
-    }
+    groom.provenance.source = Some(path.to_path_buf());
+    Ok(groom)
 }
 
 /// Reads a whole file, naming it in the error.
