@@ -6,5 +6,6 @@
 
 mod util;
 
+mod alembic;
 mod cli;
 mod formats;
