@@ -137,6 +137,47 @@ mod tests {
         assert!(groom.validate().iter().all(|p| !p.is_fatal()));
     }
 
+    /// Written by the Alembic library (`tests/data/make_xform_cubic_indexed.py`);
+    /// the expected point is Imath's `P * M` as alembic3d computes it.
+    #[test]
+    fn xform_ops_cubic_basis_and_indexed_uvs() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/xform_cubic_indexed.abc");
+        let groom = read(&path).unwrap();
+        assert_eq!(groom.strand_vertex_counts, vec![4, 4]);
+        assert_eq!(groom.basis, CurveBasis::Bspline);
+        let expected = [3.23205, 2.0, 2.86603];
+        for (got, want) in groom.points[1].iter().zip(expected) {
+            assert!((got - want).abs() < 1e-4, "{:?}", groom.points[1]);
+        }
+        assert_eq!(groom.points[0], [1.0, 2.0, 3.0]);
+        let times: Vec<f64> = groom.frames.iter().map(|f| f.time).collect();
+        assert_eq!(times.len(), 3);
+        for (i, t) in times.iter().enumerate() {
+            assert!((t - i as f64 / 30.0).abs() < 1e-12, "{times:?}");
+        }
+        // Frame 2 moved the curves by 2 along their own x, scaled by 2 and
+        // turned 30 degrees about Y.
+        let moved = groom.frames[2].points[0];
+        let step = [
+            4.0 * 30f32.to_radians().cos(),
+            0.0,
+            -4.0 * 30f32.to_radians().sin(),
+        ];
+        for k in 0..3 {
+            assert!(
+                (moved[k] - groom.points[0][k] - step[k]).abs() < 1e-4,
+                "{moved:?}"
+            );
+        }
+        assert_eq!(
+            groom.attribute("root_uv").map(|a| (&a.values, a.scope)),
+            Some((
+                &AttributeValues::Vec2(vec![[0.3, 0.4], [0.1, 0.2]]),
+                Scope::Strand
+            ))
+        );
+    }
+
     fn sample_groom() -> Groom {
         let mut groom = Groom::from_strands([
             vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.5]],
