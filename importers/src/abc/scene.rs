@@ -227,7 +227,50 @@ impl SceneReader<'_, '_> {
             bytes.len().saturating_mul(2).saturating_add(64),
             &property.path,
         )?;
-        components(property.pod, bytes, &property.path)
+        let values = components(property.pod, bytes, &property.path)?;
+        let extent = usize::from(property.extent).max(1);
+        if !values.len().is_multiple_of(extent) {
+            return Err(Fault::path(
+                &property.path,
+                format!(
+                    "{} values is not a whole number of {extent}-component elements",
+                    values.len()
+                ),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// The points of sample `index` of `P`; 32-bit floats are read as they
+    /// are, other types through [`components`].
+    fn points(&mut self, property: &Property, index: u32) -> Result<Vec<[f32; 3]>, Fault> {
+        let bytes = self.archive.sample(property, index)?;
+        self.budget
+            .take(bytes.len().saturating_add(64), &property.path)?;
+        if property.pod == Pod::F32 {
+            if !bytes.len().is_multiple_of(12) {
+                return Err(Fault::path(
+                    &property.path,
+                    format!("{} bytes is not a whole number of points", bytes.len()),
+                ));
+            }
+            let f = |c: &[u8]| f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+            return Ok(bytes
+                .chunks_exact(12)
+                .map(|c| [f(&c[0..4]), f(&c[4..8]), f(&c[8..12])])
+                .collect());
+        }
+        let values = self.sample_values(property, index)?;
+        if !values.len().is_multiple_of(3) {
+            return Err(Fault::path(
+                &property.path,
+                format!("{} values is not a whole number of points", values.len()),
+            ));
+        }
+        Ok(values
+            .chunks_exact(3)
+            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+            .collect())
     }
 
     /// The local matrix of an Xform (its first sample) and whether it
@@ -348,20 +391,21 @@ impl SceneReader<'_, '_> {
         let mut samples = Vec::new();
         let mut times = Vec::new();
         for index in 0..sample_count {
-            let values = self.sample_values(positions, index)?;
-            if values.len() as u64 != 3 * total {
+            let mut points = self.points(positions, index)?;
+            if points.len() as u64 != total {
                 return Err(Fault::path(
                     &positions.path,
                     format!(
                         "sample {index} has {} points but nVertices adds up to {total}",
-                        values.len() / 3
+                        points.len()
                     ),
                 ));
             }
-            let points: Vec<[f32; 3]> = values
-                .chunks_exact(3)
-                .map(|c| transform(world, [c[0] as f32, c[1] as f32, c[2] as f32]))
-                .collect();
+            if *world != IDENTITY {
+                for p in &mut points {
+                    *p = transform(world, *p);
+                }
+            }
             samples.push(points);
             if animated {
                 times.push(self.archive.sample_time(positions, index)?);
