@@ -6,6 +6,7 @@
 //! [`FrameWriter`] that takes one frame at a time, so memory does not grow
 //! with the number of frames.
 
+pub mod abc;
 pub mod data;
 pub mod gltf;
 pub mod hair;
@@ -42,10 +43,12 @@ impl ExportError {
 }
 
 /// The file extensions the exporters know, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd"];
+pub const EXTENSIONS: &[&str] = &[
+    "hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd", "abc",
+];
 
 /// The extensions of formats that can hold animation.
-pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb", "usda", "usdc", "usd"];
+pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb", "usda", "usdc", "usd", "abc"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,6 +90,7 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
         "gltf" | "glb" => gltf::write(path, groom),
         "usda" => usd::write(path, groom, usd::Encoding::Text),
         "usdc" | "usd" => usd::write(path, groom, usd::Encoding::Crate),
+        "abc" => abc::write(path, groom),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -100,11 +104,13 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
-    // glTF keeps frame times in seconds; USD writes time codes at `options.fps`.
+    // glTF keeps frame times in seconds; USD writes time codes and Alembic
+    // its time sampling at `options.fps`.
     match extension_of(path).as_str() {
         "usda" => usd::animated(path, groom, options, usd::Encoding::Text),
         "usdc" | "usd" => usd::animated(path, groom, options, usd::Encoding::Crate),
         "gltf" | "glb" => gltf::animated(path, groom),
+        "abc" => abc::animated(path, groom, options),
         "hair" | "data" | "obj" => Err(ExportError::Unsupported {
             file: path.to_path_buf(),
             message: "this format holds no animation; write one frame with convert --frame".into(),

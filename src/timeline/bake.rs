@@ -140,8 +140,8 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
     groom.frames.clear();
     if spec.translate != [0.0; 3] {
         for p in &mut groom.points {
-            for k in 0..3 {
-                p[k] += spec.translate[k];
+            for (c, t) in p.iter_mut().zip(spec.translate) {
+                *c += t;
             }
         }
     }

@@ -127,8 +127,8 @@ impl StagePlan {
                     target: 1.0 - rod.disulfide_cut,
                     time: (t_cut - t_roll).max(1e-9),
                 });
-                for kind in 0..3 {
-                    bonds[kind].push(drive(t_cut, 1.0, t_set - t_cut));
+                for drives in bonds.iter_mut().take(3) {
+                    drives.push(drive(t_cut, 1.0, t_set - t_cut));
                 }
                 perm = Some(PermPlan {
                     radius: rod.radius,

@@ -6,6 +6,7 @@
 
 mod util;
 
+mod alembic;
 mod bake;
 mod bench;
 mod cli;
