@@ -3,3 +3,4 @@
 //! these.
 
 pub mod generate;
+pub mod preview;
