@@ -71,7 +71,8 @@ impl Camera {
         width: f32,
         height: f32,
     ) -> Option<Camera> {
-        let (min, max) = groom::bounds_of(points.clone().filter(|p| p.iter().all(|c| c.is_finite())))?;
+        let (min, max) =
+            groom::bounds_of(points.clone().filter(|p| p.iter().all(|c| c.is_finite())))?;
         let middle = [
             0.5 * (min[0] + max[0]),
             0.5 * (min[1] + max[1]),

@@ -81,7 +81,7 @@ impl Default for PreviewOptions {
             color_by: None,
             color_range: None,
             // A mid brown.
-            hair_color: [0.11, 0.05, 0.022],
+            hair_color: [0.085, 0.035, 0.013],
         }
     }
 }
@@ -106,7 +106,11 @@ pub enum PreviewError {
     #[error("the groom has more than 4,294,967,295 points, too many to preview")]
     TooManyPoints,
     #[error("a contact sheet of {count} pictures of {width}x{height} would exceed {MAX_SHEET_PIXELS} pixels")]
-    SheetTooLarge { count: usize, width: u32, height: u32 },
+    SheetTooLarge {
+        count: usize,
+        width: u32,
+        height: u32,
+    },
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -225,7 +229,10 @@ pub fn render(groom: &Groom, options: &PreviewOptions) -> Result<Image, PreviewE
 
 /// Draws several poses (of one groom or several) with one camera and one
 /// colour range, so they compare, and lays them out with their labels.
-pub fn render_sheet(entries: &[SheetEntry], options: &PreviewOptions) -> Result<Image, PreviewError> {
+pub fn render_sheet(
+    entries: &[SheetEntry],
+    options: &PreviewOptions,
+) -> Result<Image, PreviewError> {
     check_sheet_size(entries.len(), options.width, options.height)?;
     let scene = Scene::new(entries, options)?;
     let pictures = entries
@@ -312,10 +319,12 @@ pub fn attribute_range(groom: &Groom, name: &str) -> Result<Option<(f32, f32)>, 
 }
 
 fn finite_range(values: impl Iterator<Item = f32>) -> Option<(f32, f32)> {
-    values.filter(|v| v.is_finite()).fold(None, |range, v| match range {
-        None => Some((v, v)),
-        Some((lo, hi)) => Some((f32::min(lo, v), f32::max(hi, v))),
-    })
+    values
+        .filter(|v| v.is_finite())
+        .fold(None, |range, v| match range {
+            None => Some((v, v)),
+            Some((lo, hi)) => Some((f32::min(lo, v), f32::max(hi, v))),
+        })
 }
 
 /// The values of a scalar attribute as floats, and whether one is per strand.
@@ -459,11 +468,11 @@ impl<'o> Scene<'o> {
             Some(camera) => {
                 let mut vertices = self.shade(entry.groom, points, camera, colors.as_ref());
                 set_joints(entry.groom, &mut vertices);
-                let segments = drawable_segments(entry.groom, &vertices);
-                let min_opacity = min_opacity(&vertices, &segments, width, height);
+                let strands = strand_ranges(entry.groom, vertices.len());
+                let min_opacity = min_opacity(&vertices, width, height);
                 Raster {
                     vertices: &vertices,
-                    segments,
+                    strands,
                     width,
                     height,
                     min_opacity,
@@ -472,7 +481,7 @@ impl<'o> Scene<'o> {
             }
             None => Raster {
                 vertices: &[],
-                segments: Vec::new(),
+                strands: Vec::new(),
                 width,
                 height,
                 min_opacity: 1.0,
@@ -514,74 +523,71 @@ impl<'o> Scene<'o> {
         let range = self.range;
         let hair = self.options.hair_color;
         let mut vertices = vec![ScreenVertex::default(); strand_of.len()];
-        vertices
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(i, vertex)| {
-                let Some(&strand) = strand_of.get(i) else {
-                    return;
-                };
-                let strand = strand as usize;
-                let (Some(&start), Some(&end)) = (offsets.get(strand), offsets.get(strand + 1))
-                else {
-                    return;
-                };
-                let point = |j: usize| points.get(j).map(|&p| up.to_y_up(p));
-                let Some(p) = point(i) else {
-                    return;
-                };
-                let Some(projected) = camera.project(p) else {
-                    return;
-                };
-                let before = point(i.saturating_sub(1).max(start)).unwrap_or(p);
-                let after = point((i + 1).min(end.saturating_sub(1))).unwrap_or(p);
-                let tangent = normalize(sub(after, before));
-                let along = if end - start > 1 {
-                    (i - start) as f32 / (end - start - 1) as f32
-                } else {
-                    0.0
-                };
-                let base = match (colors, range) {
-                    (Some((values, per_strand)), Some((lo, hi))) => {
-                        let value = values.get(if *per_strand { strand } else { i });
-                        match value {
-                            Some(v) if v.is_finite() => {
-                                let x = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-                                ramp(x)
-                            }
-                            _ => [0.3, 0.3, 0.3],
+        vertices.par_iter_mut().enumerate().for_each(|(i, vertex)| {
+            let Some(&strand) = strand_of.get(i) else {
+                return;
+            };
+            let strand = strand as usize;
+            let (Some(&start), Some(&end)) = (offsets.get(strand), offsets.get(strand + 1)) else {
+                return;
+            };
+            let point = |j: usize| points.get(j).map(|&p| up.to_y_up(p));
+            let Some(p) = point(i) else {
+                return;
+            };
+            let Some(projected) = camera.project(p) else {
+                return;
+            };
+            let before = point(i.saturating_sub(1).max(start)).unwrap_or(p);
+            let after = point((i + 1).min(end.saturating_sub(1))).unwrap_or(p);
+            let tangent = normalize(sub(after, before));
+            let along = if end - start > 1 {
+                (i - start) as f32 / (end - start - 1) as f32
+            } else {
+                0.0
+            };
+            let base = match (colors, range) {
+                (Some((values, per_strand)), Some((lo, hi))) => {
+                    let value = values.get(if *per_strand { strand } else { i });
+                    match value {
+                        Some(v) if v.is_finite() => {
+                            let x = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+                            ramp(x)
                         }
+                        _ => [0.3, 0.3, 0.3],
                     }
-                    (Some(_), None) => [0.3, 0.3, 0.3],
-                    _ => {
-                        // A little variation between strands reads as hair, not a surface.
-                        let jitter = 0.8 + 0.4 * unit_hash(strand as u64);
-                        hair.map(|c| c * jitter)
-                    }
-                };
-                let depth_cue = 1.0 - 0.45 * ((projected.depth - near) / depth_span).clamp(0.0, 1.0);
-                // Roots sit under the other hair: darker.
-                let root_shade = 0.55 + 0.45 * smoothstep(0.0, 0.3, along);
-                let occlusion = depth_cue * root_shade;
-                let view = camera.toward_eye(p);
-                let color = lights.shade(tangent, view, base, occlusion, colors.is_some());
-                let width = widths
-                    .as_ref()
-                    .and_then(|(values, per_strand)| {
-                        values.get(if *per_strand { strand } else { i }).copied()
-                    })
-                    .filter(|w| w.is_finite() && *w >= 0.0)
-                    .unwrap_or(default_width(groom));
-                *vertex = ScreenVertex {
-                    x: projected.x,
-                    y: projected.y,
-                    depth: projected.depth,
-                    width: width * projected.pixels_per_unit,
-                    joint: [0.0, 0.0],
-                    color,
-                    valid: true,
-                };
-            });
+                }
+                (Some(_), None) => [0.3, 0.3, 0.3],
+                _ => {
+                    // A little variation between strands reads as hair, not a surface.
+                    let jitter = 0.8 + 0.4 * unit_hash(strand as u64);
+                    hair.map(|c| c * jitter)
+                }
+            };
+            let depth_cue = 1.0 - 0.45 * ((projected.depth - near) / depth_span).clamp(0.0, 1.0);
+            // Roots sit under the other hair: darker.
+            let root_shade = 0.55 + 0.45 * smoothstep(0.0, 0.3, along);
+            let occlusion = depth_cue * root_shade;
+            let view = camera.toward_eye(p);
+            let color = lights.shade(tangent, view, base, occlusion, colors.is_some());
+            let width = widths
+                .as_ref()
+                .and_then(|(values, per_strand)| {
+                    values.get(if *per_strand { strand } else { i }).copied()
+                })
+                .filter(|w| w.is_finite() && *w >= 0.0)
+                .unwrap_or(default_width(groom));
+            *vertex = ScreenVertex {
+                x: projected.x,
+                y: projected.y,
+                depth: projected.depth,
+                width: width * projected.pixels_per_unit,
+                joint: [0.0, 0.0],
+                strand: strand as u32,
+                color,
+                valid: true,
+            };
+        });
         vertices
     }
 }
@@ -640,30 +646,30 @@ fn set_joints(groom: &Groom, vertices: &mut [ScreenVertex]) {
     }
 }
 
-/// Segments whose both ends projected, by the index of their first vertex.
-fn drawable_segments(groom: &Groom, vertices: &[ScreenVertex]) -> Vec<u32> {
-    let mut segments = Vec::with_capacity(vertices.len());
+/// First and end vertex of each strand (clipped to the vertices there are).
+fn strand_ranges(groom: &Groom, vertex_count: usize) -> Vec<(u32, u32)> {
+    let mut ranges = Vec::with_capacity(groom.strand_count());
     let mut start = 0usize;
     for &count in &groom.strand_vertex_counts {
-        let end = start.saturating_add(count as usize).min(vertices.len());
-        for i in start..end.saturating_sub(1) {
-            if vertices[i].valid && vertices[i + 1].valid {
-                segments.push(i as u32);
-            }
-        }
+        let end = start.saturating_add(count as usize).min(vertex_count);
+        ranges.push((start as u32, end as u32));
         start = end;
     }
-    segments
+    ranges
 }
 
 /// How opaque a sub-pixel hair is drawn: its true coverage where the hair
 /// piles up (dense grooms), more where strands are few, so both read.
-fn min_opacity(vertices: &[ScreenVertex], segments: &[u32], width: usize, height: usize) -> f32 {
-    let drawn: f64 = segments
-        .par_iter()
-        .map(|&i| {
-            let a = vertices[i as usize];
-            let b = vertices[i as usize + 1];
+fn min_opacity(vertices: &[ScreenVertex], width: usize, height: usize) -> f32 {
+    let drawn: f64 = vertices
+        .par_windows(2)
+        .map(|pair| {
+            let (a, b) = (pair[0], pair[1]);
+            // Pairs across two strands are not segments; they are few, and
+            // skipping them needs the strand table.
+            if !(a.valid && b.valid) || a.strand != b.strand {
+                return 0.0;
+            }
             f64::from(((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt())
         })
         .sum();
@@ -694,7 +700,11 @@ pub fn ramp(x: f32) -> [f32; 3] {
         [0.90, 0.62, 0.02],
         [0.80, 0.01, 0.005],
     ];
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let position = x * (STOPS.len() - 1) as f32;
     let index = (position.floor() as usize).min(STOPS.len() - 2);
     let f = position - index as f32;
@@ -732,7 +742,14 @@ impl Lights {
 
     /// Kajiya-Kay: diffuse `sin(T, L)`, specular
     /// `(sin(T,L) sin(T,V) - cos(T,L) cos(T,V))^p` around the reflection cone.
-    fn shade(&self, tangent: Vec3, view: Vec3, base: [f32; 3], occlusion: f32, mapped: bool) -> [f32; 3] {
+    fn shade(
+        &self,
+        tangent: Vec3,
+        view: Vec3,
+        base: [f32; 3],
+        occlusion: f32,
+        mapped: bool,
+    ) -> [f32; 3] {
         let kk = |light: Vec3, exponent: f32| {
             let tl = dot(tangent, light).clamp(-1.0, 1.0);
             let tv = dot(tangent, view).clamp(-1.0, 1.0);
@@ -749,12 +766,12 @@ impl Lights {
         // Mapped colours keep more ambient light so the ramp stays legible.
         let ambient = if mapped { 0.35 } else { 0.12 };
         let diffuse = ambient + 0.85 * key_diffuse + 0.3 * fill_diffuse;
-        let specular_strength = if mapped { 0.12 } else { 0.35 };
+        let specular_strength = if mapped { 0.12 } else { 0.25 };
         let mut color = [0.0; 3];
         for k in 0..3 {
             color[k] = base[k] * diffuse * occlusion
                 + specular_strength * key_specular * occlusion
-                + 0.12 * base[k].sqrt() * key_broad * occlusion
+                + 0.5 * base[k] * key_broad * occlusion
                 + 0.15 * rim_specular * occlusion;
         }
         color
@@ -810,8 +827,22 @@ fn draw_legend(image: &mut Image, legend_width: u32, name: &str, range: Option<(
         let rgb = ramp(x).map(raster::encode_srgb);
         image.fill_rect(bar_x, row, bar_width, 1, rgb);
     }
-    font::draw_text(image, bar_x, bar_top - line, scale, white, &format_number(hi));
-    font::draw_text(image, bar_x, bar_bottom + i64::from(4 * scale), scale, white, &format_number(lo));
+    font::draw_text(
+        image,
+        bar_x,
+        bar_top - line,
+        scale,
+        white,
+        &format_number(hi),
+    );
+    font::draw_text(
+        image,
+        bar_x,
+        bar_bottom + i64::from(4 * scale),
+        scale,
+        white,
+        &format_number(lo),
+    );
 }
 
 #[cfg(test)]

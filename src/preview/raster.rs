@@ -1,8 +1,9 @@
 //! Anti-aliased, back-to-front compositing of strand segments.
 //!
-//! Segments are sorted far to near once (a total order: depth, then index),
-//! binned into horizontal bands of rows, and each band is composited by one
-//! thread in that order. Every pixel is therefore blended in the same order
+//! Strands are sorted far to near (a total order: mean depth, then index),
+//! their segments binned into horizontal bands of rows in that order, and
+//! each band is composited by one thread. Each pixel keeps its nearest
+//! fragments in depth order. Every pixel is blended in the same order
 //! whatever the number of threads, so the picture is the same bytes.
 
 use rayon::prelude::*;
@@ -20,6 +21,8 @@ pub(crate) struct ScreenVertex {
     pub joint: [f32; 2],
     /// Linear RGB after shading.
     pub color: [f32; 3],
+    /// The strand it belongs to.
+    pub strand: u32,
     /// False when the vertex did not project (not finite, behind the camera).
     pub valid: bool,
 }
@@ -28,11 +31,14 @@ pub(crate) struct ScreenVertex {
 /// cache, large enough that few segments straddle bands.
 const BAND_ROWS: usize = 16;
 
+/// Bands binned at once.
+const GROUP_BANDS: usize = 16;
+
 /// How segments of a picture are drawn.
 pub(crate) struct Raster<'a> {
     pub vertices: &'a [ScreenVertex],
-    /// Index of the first vertex of each drawable segment (its second vertex follows it).
-    pub segments: Vec<u32>,
+    /// First and end (exclusive) vertex of each strand.
+    pub strands: Vec<(u32, u32)>,
     pub width: usize,
     pub height: usize,
     /// Opacity of a hair narrower than a pixel never drops below this, so a
@@ -52,90 +58,203 @@ fn sort_key(depth: f32, index: u32) -> u64 {
     (u64::from(!ordered) << 32) | u64::from(index)
 }
 
-/// The pixel-centre `x` interval where `c + k x` lies in `[lo, hi]`.
-fn solve(c: f32, k: f32, lo: f32, hi: f32) -> (f32, f32) {
-    if k.abs() < 1e-12 {
-        if c >= lo && c <= hi {
-            (f32::NEG_INFINITY, f32::INFINITY)
-        } else {
-            (1.0, 0.0)
+/// Layers kept per pixel: the nearest `LAYERS - 1` fragments stay separate
+/// and in depth order; the rest merge into the last layer (multi-layer alpha
+/// blending, Salvi and Vaidyanathan 2014). The depth order at a pixel then
+/// follows each fragment's own depth, not only its segment's.
+const LAYERS: usize = 3;
+
+#[derive(Debug, Clone, Copy)]
+struct Layer {
+    depth: f32,
+    /// Premultiplied colour.
+    color: [f32; 3],
+    /// Light let through.
+    transmit: f32,
+}
+
+const EMPTY: Layer = Layer {
+    depth: f32::INFINITY,
+    color: [0.0; 3],
+    transmit: 1.0,
+};
+
+fn blend(pixel: &mut [Layer; LAYERS], mut fragment: Layer) {
+    for layer in pixel.iter_mut() {
+        if fragment.depth < layer.depth {
+            std::mem::swap(&mut fragment, layer);
         }
-    } else {
-        let a = (lo - c) / k;
-        let b = (hi - c) / k;
-        (a.min(b), a.max(b))
     }
+    // `fragment` is now the farthest: merge it behind the last layer.
+    let last = &mut pixel[LAYERS - 1];
+    for k in 0..3 {
+        last.color[k] += last.transmit * fragment.color[k];
+    }
+    last.transmit *= fragment.transmit;
+}
+
+fn resolve(pixel: &[Layer; LAYERS], background: [f32; 3]) -> [f32; 3] {
+    let mut color = [0.0f32; 3];
+    let mut transmit = 1.0;
+    for layer in pixel {
+        for (c, l) in color.iter_mut().zip(layer.color) {
+            *c += transmit * l;
+        }
+        transmit *= layer.transmit;
+    }
+    for (c, b) in color.iter_mut().zip(background) {
+        *c += transmit * b;
+    }
+    color
 }
 
 impl Raster<'_> {
     /// Composites every segment over `background(row)` and returns RGB8
     /// rows (sRGB encoded).
-    pub fn render(mut self, background: impl Fn(usize) -> [f32; 3] + Sync) -> Vec<u8> {
+    pub fn render(self, background: impl Fn(usize) -> [f32; 3] + Sync) -> Vec<u8> {
         let vertices = self.vertices;
+        // Strands far to near by their mean depth. Each pixel then orders its
+        // nearest fragments by their own depth (see `blend`); keeping a
+        // strand's segments together keeps the reads of the vertices in order.
         let mut keyed: Vec<u64> = self
-            .segments
+            .strands
             .par_iter()
-            .map(|&i| {
-                let a = vertices[i as usize];
-                let b = vertices[i as usize + 1];
-                sort_key(0.5 * (a.depth + b.depth), i)
+            .enumerate()
+            .map(|(index, &(start, end))| {
+                let strand = vertices.get(start as usize..end as usize).unwrap_or(&[]);
+                let (sum, count) = strand
+                    .iter()
+                    .filter(|v| v.valid)
+                    .fold((0f64, 0u32), |(sum, count), v| {
+                        (sum + f64::from(v.depth), count + 1)
+                    });
+                let mean = if count > 0 {
+                    sum / f64::from(count)
+                } else {
+                    0.0
+                };
+                sort_key(mean as f32, index as u32)
             })
             .collect();
         keyed.par_sort_unstable();
-        self.segments.clear();
 
-        let band_count = self.height.div_ceil(BAND_ROWS);
-        let mut bands: Vec<Vec<u32>> = vec![Vec::new(); band_count];
-        for key in keyed {
-            let i = key as u32;
-            let a = vertices[i as usize];
-            let b = vertices[i as usize + 1];
-            let reach = 0.5 * a.width.max(b.width).max(1.0) + 1.0;
-            let top = a.y.min(b.y) - reach;
-            let bottom = a.y.max(b.y) + reach;
-            if bottom < 0.0 || top >= self.height as f32 {
-                continue;
-            }
-            let first = (top.max(0.0) as usize) / BAND_ROWS;
-            let last = ((bottom.min(self.height as f32 - 1.0)) as usize) / BAND_ROWS;
-            for band in bands.iter_mut().take(last + 1).skip(first) {
-                band.push(i);
-            }
-        }
+        let order: Vec<u32> = keyed.iter().map(|&key| key as u32).collect();
+        drop(keyed);
+        // The rows each strand may touch, to skip it for groups it misses.
+        let extents: Vec<[f32; 2]> = self
+            .strands
+            .par_iter()
+            .map(|&(start, end)| {
+                let strand = vertices.get(start as usize..end as usize).unwrap_or(&[]);
+                strand.iter().filter(|v| v.valid).fold(
+                    [f32::INFINITY, f32::NEG_INFINITY],
+                    |[top, bottom], v| {
+                        let reach = 0.5 * v.width.max(1.0) + 1.0;
+                        [top.min(v.y - reach), bottom.max(v.y + reach)]
+                    },
+                )
+            })
+            .collect();
 
+        let encode = SrgbTable::new();
         let width = self.width;
-        let height = self.height;
-        let mut out = vec![0u8; width * height * 3];
-        out.par_chunks_mut(width * BAND_ROWS * 3)
-            .zip(bands.par_iter())
-            .enumerate()
-            .for_each(|(band_index, (rows, segments))| {
-                let row0 = band_index * BAND_ROWS;
-                let row_count = rows.len() / (width * 3);
-                let mut buffer = vec![[0f32; 3]; width * row_count];
-                for r in 0..row_count {
-                    let color = background(row0 + r);
-                    buffer[r * width..(r + 1) * width].fill(color);
-                }
-                for &i in segments {
-                    self.draw_segment(i as usize, row0, row_count, &mut buffer);
-                }
-                for (pixel, rgb) in buffer.iter().zip(rows.chunks_exact_mut(3)) {
-                    for k in 0..3 {
-                        rgb[k] = encode_srgb(pixel[k]);
+        let mut out = vec![0u8; width * self.height * 3];
+        // Bands are drawn a group at a time: each band gets its own copy of
+        // its segments, in order, so drawing reads memory in sequence, and
+        // copies of only one group at a time bound the memory that takes.
+        let group_rows = BAND_ROWS * GROUP_BANDS;
+        let mut bands: Vec<Vec<(ScreenVertex, ScreenVertex)>> = vec![Vec::new(); GROUP_BANDS];
+        for (group_index, group) in out.chunks_mut(width * group_rows * 3).enumerate() {
+            let group_row0 = group_index * group_rows;
+            let group_row_count = group.len() / (width * 3);
+            self.bin(&order, &extents, group_row0, group_row_count, &mut bands);
+            group
+                .par_chunks_mut(width * BAND_ROWS * 3)
+                .zip(bands.par_iter())
+                .enumerate()
+                .for_each_init(Vec::new, |buffer, (band_index, (rows, segments))| {
+                    let row0 = group_row0 + band_index * BAND_ROWS;
+                    let row_count = rows.len() / (width * 3);
+                    // Reused between the bands a thread draws: fresh pages cost more than drawing.
+                    buffer.clear();
+                    buffer.resize(width * row_count, [EMPTY; LAYERS]);
+                    let buffer = buffer.as_mut_slice();
+                    for (a, b) in segments {
+                        self.draw_segment(a, b, row0, row_count, buffer);
                     }
-                }
-            });
-        let _ = height;
+                    for (r, (line, bytes)) in buffer
+                        .chunks_exact(width)
+                        .zip(rows.chunks_exact_mut(width * 3))
+                        .enumerate()
+                    {
+                        let back = background(row0 + r);
+                        for (pixel, rgb) in line.iter().zip(bytes.chunks_exact_mut(3)) {
+                            let color = resolve(pixel, back);
+                            for k in 0..3 {
+                                rgb[k] = encode.encode(color[k]);
+                            }
+                        }
+                    }
+                });
+        }
         out
     }
 
-    /// Blends segment `i` (vertices `i`, `i + 1`) into the rows
-    /// `row0 .. row0 + row_count` held in `buffer`.
-    fn draw_segment(&self, i: usize, row0: usize, row_count: usize, buffer: &mut [[f32; 3]]) {
-        let (Some(a), Some(b)) = (self.vertices.get(i), self.vertices.get(i + 1)) else {
-            return;
-        };
+    /// Fills `bands` with the segments touching each band of rows
+    /// `row0 .. row0 + row_count`, strands in `order`.
+    fn bin(
+        &self,
+        order: &[u32],
+        extents: &[[f32; 2]],
+        row0: usize,
+        row_count: usize,
+        bands: &mut [Vec<(ScreenVertex, ScreenVertex)>],
+    ) {
+        bands.iter_mut().for_each(Vec::clear);
+        let (top_row, bottom_row) = (row0 as f32, (row0 + row_count) as f32);
+        for &strand in order {
+            let Some(&(start, end)) = self.strands.get(strand as usize) else {
+                continue;
+            };
+            let Some(&[top, bottom]) = extents.get(strand as usize) else {
+                continue;
+            };
+            if bottom < top_row || top >= bottom_row {
+                continue;
+            }
+            let vertices = self
+                .vertices
+                .get(start as usize..end as usize)
+                .unwrap_or(&[]);
+            for pair in vertices.windows(2) {
+                let (a, b) = (pair[0], pair[1]);
+                if !(a.valid && b.valid) {
+                    continue;
+                }
+                let reach = 0.5 * a.width.max(b.width).max(1.0) + 1.0;
+                let top = a.y.min(b.y) - reach;
+                let bottom = a.y.max(b.y) + reach;
+                if bottom < top_row || top >= bottom_row {
+                    continue;
+                }
+                let first = (top.max(top_row) as usize - row0) / BAND_ROWS;
+                let last = (bottom.min(bottom_row - 1.0) as usize).saturating_sub(row0) / BAND_ROWS;
+                for band in bands.iter_mut().take(last + 1).skip(first) {
+                    band.push((a, b));
+                }
+            }
+        }
+    }
+
+    /// Blends a segment into the rows `row0 .. row0 + row_count` held in `buffer`.
+    fn draw_segment(
+        &self,
+        a: &ScreenVertex,
+        b: &ScreenVertex,
+        row0: usize,
+        row_count: usize,
+        buffer: &mut [[Layer; LAYERS]],
+    ) {
         let dx = b.x - a.x;
         let dy = b.y - a.y;
         let length2 = dx * dx + dy * dy;
@@ -151,9 +270,8 @@ impl Raster<'_> {
         let reach = half0.max(half1) + 0.5;
         let opacity0 = a.width.max(self.min_opacity).min(1.0);
         let opacity1 = b.width.max(self.min_opacity).min(1.0);
-        let top = (a.y.min(b.y) - reach).floor().max(row0 as f32) as usize;
-        let bottom = ((a.y.max(b.y) + reach).ceil() as usize).min(row0 + row_count);
-        let width = self.width as f32;
+        let top = floor_at_least_zero((a.y.min(b.y) - reach).max(row0 as f32));
+        let bottom = ceil_at_least_zero(a.y.max(b.y) + reach).min(row0 + row_count);
         // A joint direction that folds back (a hairpin) cannot cut: use the segment's own.
         let cut = |joint: [f32; 2]| {
             if (joint[0] * dx + joint[1] * dy) > 0.3 * length {
@@ -163,49 +281,113 @@ impl Raster<'_> {
             }
         };
         let (cut_a, cut_b) = (cut(a.joint), cut(b.joint));
+        let box_left = (a.x.min(b.x) - reach).max(0.0);
+        let box_right = (a.x.max(b.x) + reach).min(self.width as f32);
+        if box_left >= box_right {
+            return;
+        }
+        let tk = dx / length2;
+        // Where across the line |s| stays within reach, as an x interval per row.
+        let inverse_nx = if nx.abs() > 1e-6 { 1.0 / nx } else { 0.0 };
         for row in top..bottom {
             let cy = row as f32 + 0.5;
-            // Signed distance s and parameter t along the segment, both linear in x.
+            // s (signed distance), t (along), and the two cut tests are linear in x.
             let s0 = -a.x * nx + (cy - a.y) * ny;
             let t0 = (-a.x * dx + (cy - a.y) * dy) / length2;
-            let tk = dx / length2;
-            // Past the cut through a, before the cut through b, both linear in x.
             let ca0 = -a.x * cut_a[0] + (cy - a.y) * cut_a[1];
             let cb0 = -b.x * cut_b[0] + (cy - b.y) * cut_b[1];
-            let (s_lo, s_hi) = solve(s0, nx, -reach, reach);
-            let (a_lo, a_hi) = solve(ca0, cut_a[0], -1e-3, f32::MAX);
-            let (b_lo, b_hi) = solve(cb0, cut_b[0], f32::MIN, 1e-3);
-            let lo = s_lo.max(a_lo).max(b_lo).max(0.5);
-            let hi = s_hi.min(a_hi).min(b_hi).min(width - 0.5);
-            if lo > hi {
+            let (mut lo, mut hi) = (box_left, box_right);
+            if inverse_nx != 0.0 {
+                let center = -s0 * inverse_nx;
+                let spread = reach * inverse_nx.abs();
+                lo = lo.max(center - spread);
+                hi = hi.min(center + spread);
+            } else if s0.abs() > reach {
                 continue;
             }
-            let first = (lo - 0.5).ceil() as usize;
-            let last = (hi - 0.5).floor() as usize;
+            // Pixel centres (column + 0.5) within [lo, hi].
+            if lo >= hi || hi < 0.5 {
+                continue;
+            }
+            let first = ceil_at_least_zero(lo - 0.5);
+            let last = floor_at_least_zero(hi - 0.5).min(self.width - 1);
+            if first > last {
+                continue;
+            }
             let line = (row - row0) * self.width;
-            for column in first..=last.min(self.width - 1) {
+            let Some(pixels) = buffer.get_mut(line + first..=line + last) else {
+                continue;
+            };
+            for (column, pixel) in (first..).zip(pixels.iter_mut()) {
                 let cx = column as f32 + 0.5;
                 // Half-open between the cuts so a joint is drawn by one segment only.
                 if ca0 + cut_a[0] * cx < 0.0 || cb0 + cut_b[0] * cx >= 0.0 {
                     continue;
                 }
-                let t = (t0 + tk * cx).clamp(0.0, 1.0);
                 let s = (s0 + nx * cx).abs();
+                let t = (t0 + tk * cx).clamp(0.0, 1.0);
                 let half = half0 + (half1 - half0) * t;
-                let coverage = (half + 0.5 - s).clamp(0.0, 1.0);
+                let coverage = (half + 0.5 - s).min(1.0);
                 if coverage <= 0.0 {
                     continue;
                 }
                 let alpha = coverage * (opacity0 + (opacity1 - opacity0) * t);
-                let Some(pixel) = buffer.get_mut(line + column) else {
-                    continue;
-                };
-                for k in 0..3 {
-                    let color = a.color[k] + (b.color[k] - a.color[k]) * t;
-                    pixel[k] += (color - pixel[k]) * alpha;
-                }
+                let color = [0, 1, 2].map(|k| (a.color[k] + (b.color[k] - a.color[k]) * t) * alpha);
+                blend(
+                    pixel,
+                    Layer {
+                        depth: a.depth + (b.depth - a.depth) * t,
+                        color,
+                        transmit: 1.0 - alpha,
+                    },
+                );
             }
         }
+    }
+}
+
+/// `floor(x)` for the pixel arithmetic, 0 for negative `x` (the libm call
+/// costs more than the rest of a row).
+fn floor_at_least_zero(x: f32) -> usize {
+    if x > 0.0 {
+        x as usize
+    } else {
+        0
+    }
+}
+
+/// `ceil(x)`, 0 for negative `x`.
+fn ceil_at_least_zero(x: f32) -> usize {
+    if x > 0.0 {
+        let whole = x as usize;
+        if (whole as f32) < x {
+            whole + 1
+        } else {
+            whole
+        }
+    } else {
+        0
+    }
+}
+
+/// Linear to sRGB bytes through a table: the power function per pixel
+/// would cost more than drawing the strands.
+struct SrgbTable(Vec<u8>);
+
+const SRGB_STEPS: usize = 4096;
+
+impl SrgbTable {
+    fn new() -> SrgbTable {
+        SrgbTable(
+            (0..=SRGB_STEPS)
+                .map(|i| encode_srgb(i as f32 / SRGB_STEPS as f32))
+                .collect(),
+        )
+    }
+
+    fn encode(&self, linear: f32) -> u8 {
+        let index = (linear.clamp(0.0, 1.0) * SRGB_STEPS as f32 + 0.5) as usize;
+        self.0.get(index).copied().unwrap_or(255)
     }
 }
 
