@@ -4,6 +4,7 @@
 mod convert;
 mod generate;
 mod inspect;
+mod preview;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,6 +28,8 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Writes a procedural test groom.
     Generate(generate::GenerateArgs),
+    /// Draws a groom (or a sheet of its frames) to a PNG picture.
+    Preview(preview::PreviewArgs),
 }
 
 /// Bad input or usage: exit code 2.
@@ -52,6 +55,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Generate(a) => generate::run(a),
+        Command::Preview(a) => preview::run(a),
     }
 }
 
