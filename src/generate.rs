@@ -59,6 +59,10 @@ pub struct GeneratorParameters {
     pub wave_start: f32,
     /// Hair width written as the `width` attribute, metres.
     pub width: f32,
+    /// Scalp strands bend from the root normal toward -Y at this rate,
+    /// radians per metre, and are kept off the head: combed-down hair.
+    /// 0 keeps them straight along the normal.
+    pub drape: f32,
 }
 
 impl Default for GeneratorParameters {
@@ -78,6 +82,7 @@ impl Default for GeneratorParameters {
             wave_frequency: 60.0,
             wave_start: 0.03,
             width: 8.0e-5,
+            drape: 0.0,
         }
     }
 }
@@ -129,7 +134,8 @@ impl GeneratorParameters {
             && self.wave_frequency.is_finite()
             && self.wave_start.is_finite()
             && self.swatch_width.is_finite()
-            && self.width.is_finite();
+            && self.width.is_finite()
+            && self.drape.is_finite();
         if !finite {
             return fail("parameters", "every number must be finite");
         }
@@ -207,9 +213,8 @@ pub fn generate(parameters: &GeneratorParameters) -> Result<Groom, GeneratorErro
         units: Units::METERS,
         up_axis: UpAxis::Y,
         provenance: Provenance {
-            source: None,
             format: "generated".into(),
-            info: String::new(),
+            ..Default::default()
         },
         ..Groom::default()
     };
@@ -258,13 +263,31 @@ pub fn generate(parameters: &GeneratorParameters) -> Result<Groom, GeneratorErro
         } else {
             [0.0, 0.0, 1.0]
         };
-        let normal_x = normalize(cross(axis, helper));
-        let normal_y = cross(axis, normal_x);
+        // Normals of the axis, parallel-transported along the spine below.
+        let mut normal_x = normalize(cross(axis, helper));
         let phase = random.next_f64() * std::f64::consts::TAU;
         let first = groom.points.len();
-        for vertex in 0..=edges {
+        let spine = spine(p, root, axis, edges, step, center, radii);
+        for (vertex, &on_spine) in spine.iter().enumerate() {
             let arc = vertex as f64 * step;
-            let mut point = add(root, scale(axis, arc));
+            let mut point = on_spine;
+            let next = spine
+                .get(vertex + 1)
+                .or(spine.get(vertex.wrapping_sub(1)))
+                .copied()
+                .unwrap_or(on_spine);
+            let mut tangent = normalize([
+                next[0] - on_spine[0],
+                next[1] - on_spine[1],
+                next[2] - on_spine[2],
+            ]);
+            if vertex + 1 == spine.len() {
+                tangent = scale(tangent, -1.0);
+            }
+            let along =
+                normal_x[0] * tangent[0] + normal_x[1] * tangent[1] + normal_x[2] * tangent[2];
+            normal_x = normalize(add(normal_x, scale(tangent, -along)));
+            let normal_y = cross(tangent, normal_x);
             if p.shape == StrandShape::Wavy && arc > p.wave_start as f64 {
                 let z = arc - p.wave_start as f64;
                 let angle = p.wave_frequency as f64 * z + phase;
@@ -288,6 +311,69 @@ pub fn generate(parameters: &GeneratorParameters) -> Result<Groom, GeneratorErro
         AttributeValues::Vec2(root_uv),
     ));
     Ok(groom)
+}
+
+/// The strand's axis: straight along `axis`, or bending toward -Y at the
+/// drape rate and kept a little off the head ellipsoid.
+fn spine(
+    p: &GeneratorParameters,
+    root: V3,
+    axis: V3,
+    edges: usize,
+    step: f64,
+    center: V3,
+    radii: V3,
+) -> Vec<V3> {
+    let mut points = Vec::with_capacity(edges + 1);
+    points.push(root);
+    let mut direction = axis;
+    let mut current = root;
+    let bend = p.drape as f64 * step;
+    for _ in 0..edges {
+        if bend > 0.0 && p.layout == RootLayout::Scalp {
+            // Turn the direction toward -Y by at most `bend` radians, in
+            // the plane of the direction and -Y (or, straight up, the plane
+            // through the root's own horizontal direction).
+            let along = -direction[1];
+            let angle = along.clamp(-1.0, 1.0).acos();
+            if angle > 1e-9 {
+                let mut toward = [
+                    -direction[0] * along,
+                    -1.0 - direction[1] * along,
+                    -direction[2] * along,
+                ];
+                if (toward[0] * toward[0] + toward[1] * toward[1] + toward[2] * toward[2]) < 1e-12 {
+                    toward = [root[0] - center[0], 0.0, root[2] - center[2]];
+                    if toward[0] == 0.0 && toward[2] == 0.0 {
+                        toward = [0.0, 0.0, 1.0];
+                    }
+                }
+                let toward = normalize(toward);
+                let turn = bend.min(angle);
+                direction = normalize(add(scale(direction, turn.cos()), scale(toward, turn.sin())));
+            }
+        }
+        let mut next = add(current, scale(direction, step));
+        if bend > 0.0 && p.layout == RootLayout::Scalp {
+            // Keep off the head: push out along the ellipsoid's radial
+            // direction to 1.02 of its surface, keeping the edge length.
+            let local = [0, 1, 2].map(|k| (next[k] - center[k]) / radii[k]);
+            let r = (local[0] * local[0] + local[1] * local[1] + local[2] * local[2]).sqrt();
+            if r < 1.02 && r > 0.0 {
+                let pushed = [0, 1, 2].map(|k| center[k] + local[k] / r * 1.02 * radii[k]);
+                let d = normalize([
+                    pushed[0] - current[0],
+                    pushed[1] - current[1],
+                    pushed[2] - current[2],
+                ]);
+                direction = d;
+                next = add(current, scale(d, step));
+            }
+        }
+        points.push(next);
+        current = next;
+    }
+    points
 }
 
 /// Keeps every edge of a waved strand at the segment length, so the wave
@@ -374,6 +460,27 @@ mod tests {
             off_axis > 0.0 && off_axis <= 0.15 * 0.24 + 1e-4,
             "{off_axis}"
         );
+    }
+
+    #[test]
+    fn draped_hair_hangs_and_stays_off_the_head() {
+        let parameters = GeneratorParameters {
+            strands: 30,
+            drape: 20.0,
+            ..Default::default()
+        };
+        let groom = generate(&parameters).unwrap();
+        let radii = parameters.head_radii;
+        for strand in groom.strands() {
+            let tip = strand[strand.len() - 1];
+            assert!(tip[1] < strand[0][1], "tip not below root");
+            for p in &strand[1..] {
+                let r = (p[0] / radii[0]).powi(2)
+                    + (p[1] / radii[1]).powi(2)
+                    + (p[2] / radii[2]).powi(2);
+                assert!(r >= 1.0, "inside the head: {r}");
+            }
+        }
     }
 
     #[test]

@@ -4,3 +4,5 @@
 
 pub mod generate;
 pub mod preview;
+pub mod stochastic_wind;
+pub mod timeline;

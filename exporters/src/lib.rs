@@ -6,7 +6,12 @@
 //! [`FrameWriter`] that takes one frame at a time, so memory does not grow
 //! with the number of frames.
 
-use groom::{Frame, Groom};
+pub mod data;
+pub mod gltf;
+pub mod hair;
+pub mod obj;
+
+use groom::{AttributeValues, Frame, Groom, Scope};
 use std::path::{Path, PathBuf};
 
 /// Why a file could not be written.
@@ -37,6 +42,9 @@ impl ExportError {
 
 /// The file extensions the exporters know, lower case, without the dot.
 pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+
+/// The extensions of formats that can hold animation.
+pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +79,11 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
 /// (`.hair`, `.data`, `.obj`) write its points.
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
-    match groom::Units::default() {
+    match extension_of(path).as_str() {
+        "hair" => hair::write(path, groom),
+        "data" => data::write(path, groom),
+        "obj" => obj::write(path, groom),
+        "gltf" | "glb" => gltf::write(path, groom),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -85,8 +97,61 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
+    // glTF keeps frame times in seconds; the frame rate and count are not needed up front.
     let _ = options;
-    Err(ExportError::UnknownFormat {
-        file: path.to_path_buf(),
-    })
+    match extension_of(path).as_str() {
+        "gltf" | "glb" => gltf::animated(path, groom),
+        "hair" | "data" | "obj" => Err(ExportError::Unsupported {
+            file: path.to_path_buf(),
+            message: "this format holds no animation; write one frame with convert --frame".into(),
+        }),
+        _ => Err(ExportError::UnknownFormat {
+            file: path.to_path_buf(),
+        }),
+    }
 }
+
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+pub(crate) fn extension_is(path: &Path, extension: &str) -> bool {
+    extension_of(path) == extension
+}
+
+/// A float attribute as one value per vertex (per-strand values repeated on
+/// their strand); `None` when the groom has no float attribute of that name.
+pub(crate) fn vertex_floats(groom: &Groom, name: &str) -> Option<Vec<f32>> {
+    let attribute = groom.attribute(name)?;
+    let AttributeValues::Float(values) = &attribute.values else {
+        return None;
+    };
+    Some(per_vertex(groom, attribute.scope, values))
+}
+
+/// A vec3 attribute as one value per vertex, like [`vertex_floats`].
+pub(crate) fn vertex_vec3s(groom: &Groom, name: &str) -> Option<Vec<[f32; 3]>> {
+    let attribute = groom.attribute(name)?;
+    let AttributeValues::Vec3(values) = &attribute.values else {
+        return None;
+    };
+    Some(per_vertex(groom, attribute.scope, values))
+}
+
+fn per_vertex<T: Copy>(groom: &Groom, scope: Scope, values: &[T]) -> Vec<T> {
+    match scope {
+        Scope::Vertex => values.to_vec(),
+        Scope::Strand => groom
+            .strand_vertex_counts
+            .iter()
+            .zip(values)
+            .flat_map(|(&n, &v)| std::iter::repeat_n(v, n as usize))
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests;

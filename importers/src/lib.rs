@@ -4,6 +4,13 @@
 //! Every reader checks counts and offsets against the bytes it has before it
 //! allocates or indexes, and reports what is wrong with the file and where.
 
+mod binary;
+pub mod data;
+pub mod gltf;
+pub mod hair;
+pub mod mesh;
+pub mod obj;
+
 use groom::Groom;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -84,18 +91,18 @@ pub fn extension_of(path: &Path) -> String {
 /// provenance names the file and format.
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
     let mut groom: Groom = match extension_of(path).as_str() {
-        // One arm per format module, e.g. `"hair" => hair::read(path)?,`.
+        "hair" => hair::read(path)?,
+        "data" => data::read(path)?,
+        "obj" => obj::read(path)?,
+        "gltf" | "glb" => gltf::read(path)?,
         _ => {
             return Err(ImportError::UnknownFormat {
                 file: path.to_path_buf(),
             })
         }
     };
-    #[allow(unreachable_code)]
-    {
-        groom.provenance.source = Some(path.to_path_buf());
-        Ok(groom)
-    }
+    groom.provenance.source = Some(path.to_path_buf());
+    Ok(groom)
 }
 
 /// Reads a whole file, naming it in the error.

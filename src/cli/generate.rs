@@ -44,6 +44,9 @@ pub struct GenerateArgs {
     /// Wave frequency C, radians per metre.
     #[arg(long, default_value_t = 60.0)]
     wave_frequency: f32,
+    /// Combs scalp strands down: bend toward -Y in radians per metre (0: straight out).
+    #[arg(long, default_value_t = 0.0)]
+    drape: f32,
 }
 
 pub fn run(args: GenerateArgs) -> anyhow::Result<()> {
@@ -64,6 +67,7 @@ pub fn run(args: GenerateArgs) -> anyhow::Result<()> {
         scalp_angle: args.scalp_angle,
         wave_amplitude: [args.wave_amplitude[0], args.wave_amplitude[1]],
         wave_frequency: args.wave_frequency,
+        drape: args.drape,
         ..GeneratorParameters::default()
     };
     let groom = generate(&parameters)?;

@@ -1,6 +1,10 @@
 //! One integration binary: each test runs the real `groombake` executable in
 //! a temporary directory (see `util.rs`). Modules group tests by area.
 
+// A test binary: a panic with its message is how a helper reports failure.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod util;
 
 mod cli;
+mod formats;

@@ -1,0 +1,574 @@
+//! glTF 2.0: `.glb` (binary) and `.gltf` (JSON with the buffer embedded as a
+//! base64 data URI).
+//!
+//! `.gltf` embeds its buffer rather than writing a `.bin` beside it: one
+//! file can be renamed into place atomically, and Blender, three.js, Maya's
+//! and Houdini's importers and the Khronos validator all read data URIs.
+//!
+//! The groom becomes one mesh with one `LINES` primitive (a segment per pair
+//! of consecutive strand points; a one-point strand is a segment from its
+//! point to itself), in metres and Y up as glTF requires.
+//! Vertex attributes are `_NAME` accessors (upper-case name; per-strand
+//! attributes are repeated on their strand's vertices). Each attribute
+//! accessor's `extras.groombake` keeps what glTF cannot say: the attribute's
+//! own name (case and all), its scope (`vertex` or `strand`), and for
+//! integers stored as floats or split into two u16, `"type": "int"` and the
+//! encoding. Animation is one
+//! morph target per frame (POSITION deltas from the rest pose) and a STEP
+//! sampler of the mesh weights that switches target k fully on at frame k's
+//! time.
+//!
+//! Frames are streamed: each frame's deltas go to an anonymous temporary
+//! file as they arrive, and `finish` assembles the file from the rest pose,
+//! the spilled frames and the sampler, so memory holds one frame plus the
+//! rest pose, its indices and attributes.
+
+use crate::{ExportError, FrameWriter};
+use groom::{AtomicFile, AttributeValues, Frame, Groom, Scope, Units, UpAxis};
+use serde_json::{json, Value};
+use std::fs::File;
+use std::io::{self, BufWriter, Read, Seek, Write};
+use std::path::{Path, PathBuf};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const SHORT: u32 = 5122;
+const UNSIGNED_SHORT: u32 = 5123;
+const UNSIGNED_INT: u32 = 5125;
+const LINES: u32 = 1;
+/// Stands for the base64 payload in the `.gltf` JSON until it is streamed.
+const URI_PLACEHOLDER: &str = "@groombake-buffer@";
+const DATA_URI_PREFIX: &str = "data:application/octet-stream;base64,";
+/// The key of the attribute accessors' extras (read by the importer).
+const EXTRAS_KEY: &str = "groombake";
+/// The extras' encoding of 32-bit integers as VEC2 of UNSIGNED_SHORT.
+const INT_AS_U16X2: &str = "i32_as_u16x2";
+
+/// A vertex attribute laid out for the buffer.
+struct EncodedAttribute {
+    semantic: String,
+    component_type: u32,
+    accessor_type: &'static str,
+    /// Element stride; vertex attributes must be 4-byte aligned.
+    stride: usize,
+    bytes: Vec<u8>,
+    /// `{"groombake": {"name", "scope", ["type", "encoding"]}}`.
+    extras: Value,
+}
+
+pub struct GltfWriter {
+    path: PathBuf,
+    binary: bool,
+    /// Maps the groom's units and up axis to metres, Y up.
+    scale: f32,
+    up: UpAxis,
+    rest: Vec<[f32; 3]>,
+    rest_bounds: ([f32; 3], [f32; 3]),
+    indices: Vec<u32>,
+    attributes: Vec<EncodedAttribute>,
+    spill: BufWriter<File>,
+    frame_times: Vec<f32>,
+    frame_bounds: Vec<([f32; 3], [f32; 3])>,
+}
+
+pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
+    let mut writer = start(path, groom)?;
+    for frame in &groom.frames {
+        writer.write_frame(frame)?;
+    }
+    Box::new(writer).finish()
+}
+
+pub fn animated(path: &Path, groom: &Groom) -> Result<Box<dyn FrameWriter>, ExportError> {
+    Ok(Box::new(start(path, groom)?))
+}
+
+fn invalid(path: &Path, message: impl Into<String>) -> ExportError {
+    ExportError::Invalid {
+        file: path.to_path_buf(),
+        message: message.into(),
+    }
+}
+
+fn start(path: &Path, groom: &Groom) -> Result<GltfWriter, ExportError> {
+    let binary = crate::extension_is(path, "glb");
+    // Only the rest pose and attributes are converted here; frames are
+    // converted one at a time as they stream in.
+    let mut rest = Groom {
+        strand_vertex_counts: groom.strand_vertex_counts.clone(),
+        points: groom.points.clone(),
+        attributes: groom.attributes.clone(),
+        units: groom.units,
+        up_axis: groom.up_axis,
+        ..Groom::default()
+    };
+    rest.convert_to(Units::METERS, UpAxis::Y);
+    let rest_bounds =
+        groom::bounds_of(&rest.points).ok_or_else(|| invalid(path, "the groom has no points"))?;
+
+    let mut indices = Vec::new();
+    let mut first = 0u32;
+    for &count in &groom.strand_vertex_counts {
+        // A one-point strand (an empty root of USC-HairSalon) becomes a
+        // degenerate segment, so that it survives the round trip.
+        if count == 1 {
+            indices.extend([first, first]);
+        }
+        for k in 1..count {
+            indices.push(first + k - 1);
+            indices.push(first + k);
+        }
+        first = first
+            .checked_add(count)
+            .ok_or_else(|| invalid(path, "more points than glTF indices can address"))?;
+    }
+    if indices.is_empty() {
+        return Err(invalid(path, "the groom has no segments to draw as lines"));
+    }
+    let attributes = encode_attributes(&rest);
+    let directory = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let spill = tempfile::tempfile_in(&directory)
+        .or_else(|_| tempfile::tempfile())
+        .map_err(|e| ExportError::io(path, e))?;
+    Ok(GltfWriter {
+        path: path.to_path_buf(),
+        binary,
+        scale: (groom.units.meters_per_unit) as f32,
+        up: groom.up_axis,
+        rest: rest.points,
+        rest_bounds,
+        indices,
+        attributes,
+        spill: BufWriter::with_capacity(1 << 20, spill),
+        frame_times: Vec::new(),
+        frame_bounds: Vec::new(),
+    })
+}
+
+/// The `_NAME` semantic of an attribute: upper case, characters other than
+/// ASCII letters, digits and `_` as `_`, and a `_2`, `_3`, ... suffix where
+/// two names would otherwise meet (`width` and `Width`). The name itself
+/// goes to the accessor's extras.
+fn semantic_for(name: &str, taken: &mut std::collections::BTreeSet<String>) -> String {
+    let base: String = std::iter::once('_')
+        .chain(name.chars().map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_uppercase()
+            } else {
+                '_'
+            }
+        }))
+        .collect();
+    let mut semantic = base.clone();
+    let mut suffix = 1;
+    while !taken.insert(semantic.clone()) {
+        suffix += 1;
+        semantic = format!("{base}_{suffix}");
+    }
+    semantic
+}
+
+/// The largest magnitude up to which every integer is an f32.
+const EXACT_FLOAT_INTEGER: i32 = 1 << 24;
+
+fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
+    let mut encoded = Vec::new();
+    let mut taken = std::collections::BTreeSet::new();
+    let counts = &groom.strand_vertex_counts;
+    for attribute in &groom.attributes {
+        // Per-strand values are repeated on every vertex of their strand,
+        // so that other tools see them; the extras mark the scope so that
+        // the importer makes them per strand again.
+        let per_vertex = |components: &[f32], width: usize| -> Vec<f32> {
+            match attribute.scope {
+                Scope::Vertex => components.to_vec(),
+                Scope::Strand => counts
+                    .iter()
+                    .zip(components.chunks_exact(width))
+                    .flat_map(|(&n, value)| std::iter::repeat_n(value, n as usize).flatten())
+                    .copied()
+                    .collect(),
+            }
+        };
+        let semantic = semantic_for(&attribute.name, &mut taken);
+        let mut marker = json!({
+            "name": attribute.name,
+            "scope": match attribute.scope {
+                Scope::Vertex => "vertex",
+                Scope::Strand => "strand",
+            },
+        });
+        let floats = |accessor_type, width, marker: Value| {
+            let values = per_vertex(&attribute.values.to_f32_flat(), width);
+            EncodedAttribute {
+                semantic: semantic.clone(),
+                component_type: FLOAT,
+                accessor_type,
+                stride: 4 * width,
+                bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                extras: json!({ EXTRAS_KEY: marker }),
+            }
+        };
+        encoded.push(match &attribute.values {
+            AttributeValues::Float(_) => floats("SCALAR", 1, marker),
+            AttributeValues::Vec2(_) => floats("VEC2", 2, marker),
+            AttributeValues::Vec3(_) => floats("VEC3", 3, marker),
+            AttributeValues::Int(values) => {
+                let values: Vec<i32> = match attribute.scope {
+                    Scope::Vertex => values.clone(),
+                    Scope::Strand => counts
+                        .iter()
+                        .zip(values)
+                        .flat_map(|(&n, &v)| std::iter::repeat_n(v, n as usize))
+                        .collect(),
+                };
+                // glTF has no 32-bit signed components: 16-bit when the
+                // values fit (padded to 4-byte elements), float when every
+                // value is exact as a float, otherwise the 32 bits as two
+                // u16 (VEC2, low half first), marked in the extras.
+                let fits_short = values.iter().all(|&v| i16::try_from(v).is_ok());
+                let fits_ushort = values.iter().all(|&v| u16::try_from(v).is_ok());
+                let fits_float = values
+                    .iter()
+                    .all(|&v| v.unsigned_abs() <= EXACT_FLOAT_INTEGER as u32);
+                if fits_short || fits_ushort {
+                    let mut bytes = Vec::with_capacity(4 * values.len());
+                    for &v in &values {
+                        let two = if fits_short {
+                            (v as i16).to_le_bytes()
+                        } else {
+                            (v as u16).to_le_bytes()
+                        };
+                        bytes.extend_from_slice(&two);
+                        bytes.extend_from_slice(&[0, 0]);
+                    }
+                    EncodedAttribute {
+                        semantic,
+                        component_type: if fits_short { SHORT } else { UNSIGNED_SHORT },
+                        accessor_type: "SCALAR",
+                        stride: 4,
+                        bytes,
+                        extras: json!({ EXTRAS_KEY: marker }),
+                    }
+                } else if fits_float {
+                    marker["type"] = json!("int");
+                    floats("SCALAR", 1, marker)
+                } else {
+                    marker["type"] = json!("int");
+                    marker["encoding"] = json!(INT_AS_U16X2);
+                    EncodedAttribute {
+                        semantic,
+                        component_type: UNSIGNED_SHORT,
+                        accessor_type: "VEC2",
+                        stride: 4,
+                        bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                        extras: json!({ EXTRAS_KEY: marker }),
+                    }
+                }
+            }
+        });
+    }
+    encoded
+}
+
+impl FrameWriter for GltfWriter {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), ExportError> {
+        let index = self.frame_times.len();
+        if frame.points.len() != self.rest.len() {
+            return Err(invalid(
+                &self.path,
+                format!(
+                    "frame {index} has {} points, the groom {}",
+                    frame.points.len(),
+                    self.rest.len()
+                ),
+            ));
+        }
+        let time = frame.time as f32;
+        if !(time.is_finite() && time >= 0.0) {
+            return Err(invalid(
+                &self.path,
+                format!(
+                    "frame {index}: time {} is not a non-negative number of seconds",
+                    frame.time
+                ),
+            ));
+        }
+        if self.frame_times.last().is_some_and(|&last| time <= last) {
+            return Err(invalid(
+                &self.path,
+                format!("frame {index}: time {} does not increase", frame.time),
+            ));
+        }
+        let mut min = [f32::INFINITY; 3];
+        let mut max = [f32::NEG_INFINITY; 3];
+        let mut bytes = Vec::with_capacity(12 * frame.points.len());
+        for (vertex, (p, rest)) in frame.points.iter().zip(&self.rest).enumerate() {
+            let moved = self.up.to_y_up(*p).map(|c| c * self.scale);
+            let mut delta = [0.0f32; 3];
+            for k in 0..3 {
+                delta[k] = moved[k] - rest[k];
+                if !delta[k].is_finite() {
+                    return Err(invalid(
+                        &self.path,
+                        format!("frame {index}, vertex {vertex}: point is not finite"),
+                    ));
+                }
+                min[k] = min[k].min(delta[k]);
+                max[k] = max[k].max(delta[k]);
+                bytes.extend_from_slice(&delta[k].to_le_bytes());
+            }
+        }
+        self.spill
+            .write_all(&bytes)
+            .map_err(|e| ExportError::io(&self.path, e))?;
+        self.frame_times.push(time);
+        self.frame_bounds.push((min, max));
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>) -> Result<(), ExportError> {
+        let path = self.path.clone();
+        self.assemble().map_err(|e| ExportError::io(&path, e))?
+    }
+}
+
+/// Where each part sits in the binary buffer.
+struct Layout {
+    parts: Vec<(usize, usize)>,
+    total: usize,
+}
+
+impl Layout {
+    fn new(sizes: &[usize]) -> Layout {
+        let mut parts = Vec::with_capacity(sizes.len());
+        let mut offset = 0;
+        for &size in sizes {
+            parts.push((offset, size));
+            // Every part is a multiple of 4 bytes long, so offsets stay aligned.
+            offset += size;
+        }
+        Layout {
+            parts,
+            total: offset,
+        }
+    }
+}
+
+fn vec3_json(v: [f32; 3]) -> Value {
+    // f32 -> f64 is exact, so the validator's min/max check matches the data.
+    json!([v[0] as f64, v[1] as f64, v[2] as f64])
+}
+
+impl GltfWriter {
+    fn json(&self, layout: &Layout) -> Value {
+        let frames = self.frame_times.len();
+        let vertices = self.rest.len();
+        let mut views = Vec::new();
+        let mut accessors = Vec::new();
+        let mut part = layout.parts.iter();
+        let mut view = |target: Option<u32>, stride: Option<usize>| {
+            let (offset, length) = part.next().copied().unwrap_or((0, 0));
+            let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": length});
+            if let Some(target) = target {
+                v["target"] = json!(target);
+            }
+            if let Some(stride) = stride {
+                v["byteStride"] = json!(stride);
+            }
+            views.push(v);
+            views.len() - 1
+        };
+        let position_view = view(Some(ARRAY_BUFFER), None);
+        accessors.push(json!({
+            "bufferView": position_view, "componentType": FLOAT, "count": vertices, "type": "VEC3",
+            "min": vec3_json(self.rest_bounds.0), "max": vec3_json(self.rest_bounds.1),
+        }));
+        let index_view = view(Some(ELEMENT_ARRAY_BUFFER), None);
+        accessors.push(json!({
+            "bufferView": index_view, "componentType": UNSIGNED_INT, "count": self.indices.len(), "type": "SCALAR",
+        }));
+        let mut attributes = serde_json::Map::new();
+        attributes.insert("POSITION".into(), json!(0));
+        for attribute in &self.attributes {
+            let stride = (attribute.component_type != FLOAT).then_some(attribute.stride);
+            let v = view(Some(ARRAY_BUFFER), stride);
+            accessors.push(json!({
+                "bufferView": v, "componentType": attribute.component_type, "count": vertices,
+                "type": attribute.accessor_type, "extras": attribute.extras,
+            }));
+            attributes.insert(attribute.semantic.clone(), json!(accessors.len() - 1));
+        }
+        let mut targets = Vec::new();
+        for (min, max) in &self.frame_bounds {
+            let v = view(Some(ARRAY_BUFFER), None);
+            accessors.push(json!({
+                "bufferView": v, "componentType": FLOAT, "count": vertices, "type": "VEC3",
+                "min": vec3_json(*min), "max": vec3_json(*max),
+            }));
+            targets.push(json!({"POSITION": accessors.len() - 1}));
+        }
+        let mut primitive = json!({"attributes": attributes, "indices": 1, "mode": LINES});
+        let mut mesh = json!({"name": "groom"});
+        let mut document = json!({
+            "asset": {"version": "2.0", "generator": concat!("groombake ", env!("CARGO_PKG_VERSION"))},
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0, "name": "groom"}],
+        });
+        if frames > 0 {
+            primitive["targets"] = json!(targets);
+            mesh["weights"] = json!(vec![0.0; frames]);
+            let names: Vec<String> = (0..frames).map(|k| format!("frame_{k}")).collect();
+            mesh["extras"] = json!({"targetNames": names});
+            let times_view = view(None, None);
+            let first = self.frame_times.first().copied().unwrap_or(0.0) as f64;
+            let last = self.frame_times.last().copied().unwrap_or(0.0) as f64;
+            accessors.push(json!({
+                "bufferView": times_view, "componentType": FLOAT, "count": frames, "type": "SCALAR",
+                "min": [first], "max": [last],
+            }));
+            let weights_view = view(None, None);
+            accessors.push(json!({
+                "bufferView": weights_view, "componentType": FLOAT, "count": frames * frames, "type": "SCALAR",
+            }));
+            document["animations"] = json!([{
+                "name": "groom",
+                "samplers": [{"input": accessors.len() - 2, "output": accessors.len() - 1, "interpolation": "STEP"}],
+                "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
+            }]);
+        }
+        mesh["primitives"] = json!([primitive]);
+        document["meshes"] = json!([mesh]);
+        document["accessors"] = json!(accessors);
+        document["bufferViews"] = json!(views);
+        let mut buffer = json!({"byteLength": layout.total});
+        if !self.binary {
+            buffer["uri"] = json!(URI_PLACEHOLDER);
+        }
+        document["buffers"] = json!([buffer]);
+        document
+    }
+
+    fn layout(&self) -> Layout {
+        let vertices = self.rest.len();
+        let frames = self.frame_times.len();
+        let mut sizes = vec![12 * vertices, 4 * self.indices.len()];
+        sizes.extend(self.attributes.iter().map(|a| a.bytes.len()));
+        sizes.extend(std::iter::repeat_n(12 * vertices, frames));
+        if frames > 0 {
+            sizes.push(4 * frames);
+            // The weights are frames x frames floats (one-hot rows): quadratic,
+            // but 4 bytes per entry stay small next to the frames' points.
+            sizes.push(4 * frames * frames);
+        }
+        Layout::new(&sizes)
+    }
+
+    /// Writes the binary buffer: rest pose, indices, attributes, the spilled
+    /// frames, then the sampler's times and weights.
+    fn write_buffer(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        let mut chunk = Vec::with_capacity(1 << 16);
+        let flush = |chunk: &mut Vec<u8>, out: &mut dyn Write, force: bool| {
+            if force || chunk.len() >= 1 << 16 {
+                out.write_all(chunk)?;
+                chunk.clear();
+            }
+            io::Result::Ok(())
+        };
+        for value in self.rest.iter().flatten() {
+            chunk.extend_from_slice(&value.to_le_bytes());
+            flush(&mut chunk, out, false)?;
+        }
+        for value in &self.indices {
+            chunk.extend_from_slice(&value.to_le_bytes());
+            flush(&mut chunk, out, false)?;
+        }
+        flush(&mut chunk, out, true)?;
+        for attribute in &self.attributes {
+            out.write_all(&attribute.bytes)?;
+        }
+        self.spill.flush()?;
+        let spill = self.spill.get_mut();
+        spill.rewind()?;
+        let copied = io::copy(&mut spill.take(u64::MAX), out)?;
+        let expected = (12 * self.rest.len() * self.frame_times.len()) as u64;
+        if copied != expected {
+            return Err(io::Error::other(format!(
+                "frame spill file has {copied} bytes, expected {expected}"
+            )));
+        }
+        let frames = self.frame_times.len();
+        if frames > 0 {
+            for time in &self.frame_times {
+                chunk.extend_from_slice(&time.to_le_bytes());
+            }
+            flush(&mut chunk, out, true)?;
+            for row in 0..frames {
+                for column in 0..frames {
+                    let weight: f32 = if row == column { 1.0 } else { 0.0 };
+                    chunk.extend_from_slice(&weight.to_le_bytes());
+                    flush(&mut chunk, out, false)?;
+                }
+            }
+            flush(&mut chunk, out, true)?;
+        }
+        Ok(())
+    }
+
+    fn assemble(mut self) -> io::Result<Result<(), ExportError>> {
+        let layout = self.layout();
+        let document = self.json(&layout);
+        let text = serde_json::to_string(&document).map_err(io::Error::other)?;
+        let mut out = AtomicFile::create(&self.path)?;
+        if self.binary {
+            let json_padded = text.len().next_multiple_of(4);
+            let bin_padded = layout.total.next_multiple_of(4);
+            let total = 12 + 8 + json_padded + 8 + bin_padded;
+            let Ok(total32) = u32::try_from(total) else {
+                return Ok(Err(invalid(
+                    &self.path,
+                    format!("the GLB would be {total} bytes, over the format's 4 GiB limit; write .gltf"),
+                )));
+            };
+            out.write_all(b"glTF")?;
+            out.write_all(&2u32.to_le_bytes())?;
+            out.write_all(&total32.to_le_bytes())?;
+            out.write_all(&(json_padded as u32).to_le_bytes())?;
+            out.write_all(b"JSON")?;
+            out.write_all(text.as_bytes())?;
+            out.write_all(&b"   "[..json_padded - text.len()])?;
+            out.write_all(&(bin_padded as u32).to_le_bytes())?;
+            out.write_all(b"BIN\0")?;
+            self.write_buffer(&mut out)?;
+            out.write_all(&[0u8; 3][..bin_padded - layout.total])?;
+        } else {
+            let placeholder = format!("\"{URI_PLACEHOLDER}\"");
+            let Some((before, after)) = text.split_once(&placeholder) else {
+                return Err(io::Error::other(
+                    "buffer URI placeholder missing from the JSON",
+                ));
+            };
+            out.write_all(before.as_bytes())?;
+            out.write_all(b"\"")?;
+            out.write_all(DATA_URI_PREFIX.as_bytes())?;
+            {
+                let mut encoder = base64::write::EncoderWriter::new(
+                    &mut out,
+                    &base64::engine::general_purpose::STANDARD,
+                );
+                self.write_buffer(&mut encoder)?;
+                encoder.finish()?;
+            }
+            out.write_all(b"\"")?;
+            out.write_all(after.as_bytes())?;
+            out.write_all(b"\n")?;
+        }
+        out.commit()?;
+        Ok(Ok(()))
+    }
+}

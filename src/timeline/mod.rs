@@ -1,0 +1,602 @@
+//! Timelines of hair treatments: the TOML schema ([`schema`]), its checks
+//! (this module), the stages that drive the simulation ([`stages`]) and the
+//! bake that runs them and writes the exports ([`bake`]).
+
+pub mod motion;
+pub mod schema;
+
+use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
+use serde_spanned::Spanned;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// A timeline that cannot be used, with where in its file.
+#[derive(Debug, thiserror::Error)]
+#[error("{}:{line}:{column}: {message}", file.display())]
+pub struct TimelineError {
+    pub file: PathBuf,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+/// A parsed and checked timeline, with its file's text for later errors.
+#[derive(Debug)]
+pub struct Timeline {
+    pub path: PathBuf,
+    pub text: String,
+    pub file: TimelineFile,
+    /// Time step, seconds.
+    pub dt: f64,
+}
+
+/// The names of the bond kinds, in the solver's order.
+pub const BOND_NAMES: [&str; 4] = ["hydrogen", "ionic", "disulfide", "peptide"];
+
+/// 1-based line and column of a byte offset.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = &text.as_bytes()[..offset];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |p| p + 1);
+    let column = String::from_utf8_lossy(&before[line_start..])
+        .chars()
+        .count()
+        + 1;
+    (line, column)
+}
+
+impl Timeline {
+    /// An error at a span of the file (a default span `0..0` points at the
+    /// first line: used for values that were not written in the file).
+    pub fn error_at(&self, span: Range<usize>, message: impl Into<String>) -> TimelineError {
+        error_at(&self.path, &self.text, span, message)
+    }
+
+    /// Reads, parses and checks a timeline. Every check that needs no
+    /// simulation happens here, so a bad timeline fails before any work.
+    pub fn load(path: &Path) -> Result<Timeline, TimelineError> {
+        let text = std::fs::read_to_string(path).map_err(|e| TimelineError {
+            file: path.to_path_buf(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read the timeline: {e}"),
+        })?;
+        let file: TimelineFile = toml::from_str(&text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            error_at(path, &text, span, e.message().trim().to_string())
+        })?;
+        let mut timeline = Timeline {
+            path: path.to_path_buf(),
+            text,
+            file,
+            dt: 0.0,
+        };
+        timeline.dt = timeline.check()?;
+        Ok(timeline)
+    }
+
+    /// Resolves a path written in the timeline against the timeline's folder.
+    pub fn resolve(&self, relative: &str) -> PathBuf {
+        let base = self.path.parent().unwrap_or(Path::new(""));
+        base.join(relative)
+    }
+
+    /// Total simulated time of all stages, seconds.
+    pub fn duration(&self) -> f64 {
+        self.file
+            .stages
+            .get_ref()
+            .iter()
+            .map(|s| *s.duration.get_ref())
+            .sum()
+    }
+
+    fn check(&self) -> Result<f64, TimelineError> {
+        let f = &self.file;
+        let fail = |span: Range<usize>, message: String| Err(self.error_at(span, message));
+
+        // Groom.
+        match (&f.groom.source, &f.groom.generate) {
+            (Some(_), Some(g)) => {
+                return fail(
+                    g.span(),
+                    "give either `source` or `generate`, not both".into(),
+                )
+            }
+            (None, None) => {
+                return fail(
+                    0..0,
+                    "[groom] needs `source` (a groom file) or `generate`".into(),
+                )
+            }
+            (Some(source), None) => {
+                let path = self.resolve(source.get_ref());
+                if !path.is_file() {
+                    return fail(
+                        source.span(),
+                        format!("groom file '{}' not found", path.display()),
+                    );
+                }
+            }
+            (None, Some(g)) => {
+                if let Err(e) = g.get_ref().check() {
+                    return fail(g.span(), e.to_string());
+                }
+            }
+        }
+        if let Some(units) = &f.groom.units {
+            if let Err(e) = units.get_ref().parse::<groom::Units>() {
+                return fail(units.span(), e);
+            }
+        }
+        if let Some(up) = &f.groom.up {
+            if let Err(e) = up.get_ref().parse::<groom::UpAxis>() {
+                return fail(up.span(), e);
+            }
+        }
+        if !f.groom.translate.iter().all(|c| c.is_finite()) {
+            return fail(0..0, "[groom] translate must be finite".into());
+        }
+
+        // Material.
+        let m = &f.material;
+        if !(0.0..=1.0).contains(m.stiffness.get_ref()) {
+            return fail(m.stiffness.span(), "stiffness must be in [0, 1]".into());
+        }
+        if !(0.0..=1.0).contains(m.cuticle_peel_per_cm.get_ref()) {
+            return fail(
+                m.cuticle_peel_per_cm.span(),
+                "cuticle_peel_per_cm must be in [0, 1]".into(),
+            );
+        }
+        let bonds = m.bonds.get_ref().as_array();
+        if bonds.iter().any(|b| !(b.is_finite() && *b >= 0.0)) || bonds.iter().sum::<f32>() <= 0.0 {
+            return fail(
+                m.bonds.span(),
+                "bond influences must be non-negative with a positive sum".into(),
+            );
+        }
+
+        // Solver.
+        let s = &f.solver;
+        let dt = match s.dt.get_ref().seconds() {
+            Some(dt) if dt.is_finite() && dt > 0.0 && dt <= 1.0 / 30.0 => dt,
+            _ => {
+                return fail(
+                    s.dt.span(),
+                    "dt must be a time step in (0, 1/30] s, as seconds or \"1/360\"".into(),
+                )
+            }
+        };
+        if !(1..=100).contains(s.iterations.get_ref()) {
+            return fail(
+                s.iterations.span(),
+                "iterations must be between 1 and 100".into(),
+            );
+        }
+        if !s.gravity.iter().all(|g| g.is_finite()) {
+            return fail(0..0, "gravity must be finite".into());
+        }
+        if !(s.hair_radius.get_ref().is_finite() && *s.hair_radius.get_ref() > 0.0) {
+            return fail(
+                s.hair_radius.span(),
+                "hair_radius must be a positive length".into(),
+            );
+        }
+        if let Some(hh) = &s.hair_hair {
+            if !(0.0..=10.0).contains(&hh.get_ref().strength) {
+                return fail(
+                    hh.span(),
+                    "hair_hair strength must be in [0, 10] (the paper: stable below 10)".into(),
+                );
+            }
+        }
+        let damping = s.damping.get_ref();
+        if !(damping.linear >= 0.0
+            && damping.angular >= 0.0
+            && damping.linear.is_finite()
+            && damping.angular.is_finite())
+        {
+            return fail(s.damping.span(), "damping must be non-negative".into());
+        }
+        if !(s.quaternion_mass_scale.get_ref().is_finite()
+            && *s.quaternion_mass_scale.get_ref() > 0.0)
+        {
+            return fail(
+                s.quaternion_mass_scale.span(),
+                "quaternion_mass_scale must be positive".into(),
+            );
+        }
+
+        // Colliders.
+        let mut names: Vec<&str> = Vec::new();
+        for c in &f.colliders {
+            let name = c.name.get_ref().as_str();
+            if names.contains(&name) {
+                return fail(c.name.span(), format!("collider name '{name}' used twice"));
+            }
+            names.push(name);
+            self.check_shape(&c.shape)?;
+            if !(c.friction.get_ref().is_finite() && *c.friction.get_ref() >= 0.0) {
+                return fail(c.friction.span(), "friction must be non-negative".into());
+            }
+            let keys = c.motion.get_ref();
+            let finite = keys.iter().all(|k| {
+                k.t.is_finite()
+                    && k.translation
+                        .iter()
+                        .chain(k.rotation.iter())
+                        .all(|v| v.is_finite())
+            });
+            if !finite || keys.windows(2).any(|w| w[1].t <= w[0].t) {
+                return fail(
+                    c.motion.span(),
+                    "motion keys need finite values and increasing times".into(),
+                );
+            }
+        }
+
+        // Stages.
+        let stages = f.stages.get_ref();
+        if stages.is_empty() {
+            return fail(
+                f.stages.span(),
+                "a timeline needs at least one [[stage]]".into(),
+            );
+        }
+        for stage in stages {
+            self.check_stage(stage, &names, dt)?;
+        }
+
+        // Exports.
+        let mut paths: Vec<&str> = Vec::new();
+        for e in &f.exports {
+            let path = e.path.get_ref().as_str();
+            if paths.contains(&path) {
+                return fail(e.path.span(), format!("export path '{path}' used twice"));
+            }
+            paths.push(path);
+            let extension = importers::extension_of(Path::new(path));
+            if !exporters::EXTENSIONS.contains(&extension.as_str()) {
+                return fail(
+                    e.path.span(),
+                    format!(
+                        "unknown output format '.{extension}' (known: {})",
+                        exporters::EXTENSIONS.join(", ")
+                    ),
+                );
+            }
+            if e.what == ExportWhat::Animated
+                && !exporters::ANIMATED_EXTENSIONS.contains(&extension.as_str())
+            {
+                return fail(
+                    e.path.span(),
+                    format!(
+                        "'.{extension}' cannot hold animation (animated exports: {})",
+                        exporters::ANIMATED_EXTENSIONS.join(", ")
+                    ),
+                );
+            }
+            match (&e.fps, e.what) {
+                (Some(fps), ExportWhat::Animated) => {
+                    let v = *fps.get_ref();
+                    if !(v.is_finite() && v > 0.0 && v <= 1.0 / dt) {
+                        return fail(
+                            fps.span(),
+                            format!(
+                                "fps must be in (0, {}] (one frame per step at most)",
+                                1.0 / dt
+                            ),
+                        );
+                    }
+                }
+                (Some(fps), _) => {
+                    return fail(fps.span(), "fps applies only to animated exports".into())
+                }
+                (None, _) => {}
+            }
+            if let Some(units) = &e.units {
+                if let Err(message) = units.get_ref().parse::<groom::Units>() {
+                    return fail(units.span(), message);
+                }
+            }
+            if let Some(up) = &e.up {
+                if let Err(message) = up.get_ref().parse::<groom::UpAxis>() {
+                    return fail(up.span(), message);
+                }
+            }
+        }
+        Ok(dt)
+    }
+
+    fn check_shape(&self, shape: &Spanned<ShapeSpec>) -> Result<(), TimelineError> {
+        let positive = |v: &[f32]| v.iter().all(|x| x.is_finite() && *x > 0.0);
+        let ok = match shape.get_ref() {
+            ShapeSpec::HalfSpace { normal } => {
+                normal.iter().all(|x| x.is_finite())
+                    && normal.iter().map(|x| x * x).sum::<f32>() > 0.0
+            }
+            ShapeSpec::Cuboid { half_extents } => positive(half_extents),
+            ShapeSpec::Ball { radius } => positive(&[*radius]),
+            ShapeSpec::Capsule {
+                half_height,
+                radius,
+            }
+            | ShapeSpec::Cylinder {
+                half_height,
+                radius,
+            } => positive(&[*half_height, *radius]),
+            ShapeSpec::Mesh { path, scale } => {
+                let resolved = self.resolve(path);
+                if !resolved.is_file() {
+                    return Err(self.error_at(
+                        shape.span(),
+                        format!("mesh file '{}' not found", resolved.display()),
+                    ));
+                }
+                let extension = importers::extension_of(&resolved);
+                if !["obj", "glb", "gltf"].contains(&extension.as_str()) {
+                    return Err(self.error_at(
+                        shape.span(),
+                        "collider meshes are read from .obj, .glb or .gltf",
+                    ));
+                }
+                positive(&[*scale])
+            }
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.error_at(
+                shape.span(),
+                "shape sizes must be positive and finite (a half-space needs a non-zero normal)",
+            ))
+        }
+    }
+
+    fn check_stage(
+        &self,
+        stage: &schema::StageSpec,
+        colliders: &[&str],
+        dt: f64,
+    ) -> Result<(), TimelineError> {
+        let kind = *stage.kind.get_ref();
+        let fail = |span: Range<usize>, message: String| Err(self.error_at(span, message));
+        let duration = *stage.duration.get_ref();
+        if !(duration.is_finite() && duration > 0.0 && duration <= 86_400.0) {
+            return fail(
+                stage.duration.span(),
+                format!(
+                    "{} stage: duration must be positive (seconds, at most a day)",
+                    kind.name()
+                ),
+            );
+        }
+        if duration < dt {
+            return fail(
+                stage.duration.span(),
+                format!(
+                    "{} stage: duration is shorter than one time step",
+                    kind.name()
+                ),
+            );
+        }
+        for name in &stage.colliders {
+            if !colliders.contains(&name.get_ref().as_str()) {
+                return fail(
+                    name.span(),
+                    format!("no collider named '{}'", name.get_ref()),
+                );
+            }
+        }
+        for (name, drive) in &stage.bonds {
+            if !BOND_NAMES.contains(&name.as_str()) {
+                return fail(
+                    drive.span(),
+                    format!("unknown bond '{name}' (known: {})", BOND_NAMES.join(", ")),
+                );
+            }
+            check_drive(self, drive)?;
+        }
+        if let Some(w) = &stage.wetness {
+            check_drive(self, w)?;
+        }
+        let only = |present: bool, span: Range<usize>, what: &str, kinds: &[StageKind]| {
+            if present && !kinds.contains(&kind) {
+                let names: Vec<_> = kinds.iter().map(|k| k.name()).collect();
+                Err(self.error_at(
+                    span,
+                    format!(
+                        "`{what}` applies to {} stages, not {}",
+                        names.join("/"),
+                        kind.name()
+                    ),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        only(
+            stage.shampoo,
+            stage.kind.span(),
+            "shampoo",
+            &[StageKind::Wet, StageKind::Wash],
+        )?;
+        if let Some(d) = &stage.drying_time {
+            only(
+                true,
+                d.span(),
+                "drying_time",
+                &[StageKind::Dry, StageKind::Wash],
+            )?;
+            if !(d.get_ref().is_finite() && *d.get_ref() > 0.0) {
+                return fail(d.span(), "drying_time must be positive".into());
+            }
+        }
+        if let Some(b) = &stage.blower {
+            only(true, b.span(), "blower", &[StageKind::Dry])?;
+            let v = b.get_ref();
+            let finite = v.from.iter().chain(v.to.iter()).all(|x| x.is_finite());
+            let length: f32 = (0..3).map(|k| (v.to[k] - v.from[k]).powi(2)).sum();
+            let rates_ok = v.strength >= 0.0 && v.hydrogen_rate >= 0.0;
+            if !finite || length <= 0.0 || !rates_ok {
+                return fail(
+                    b.span(),
+                    "blower needs distinct finite `from`/`to` and non-negative strength and rate"
+                        .into(),
+                );
+            }
+        }
+        if let Some(r) = &stage.rod {
+            only(true, r.span(), "rod", &[StageKind::Perm])?;
+            let v = r.get_ref();
+            let phases_ok = v.phases[0] > 0.0
+                && v.phases[0] < v.phases[1]
+                && v.phases[1] < v.phases[2]
+                && v.phases[2] <= 1.0;
+            if !(v.radius > 0.0
+                && v.root_gap >= 0.0
+                && (0.0..=1.0).contains(&v.disulfide_cut)
+                && phases_ok)
+            {
+                return fail(r.span(), "rod needs a positive radius, root_gap >= 0, disulfide_cut in [0, 1] and increasing phases in (0, 1]".into());
+            }
+        }
+        match (&stage.wind, kind) {
+            (Some(w), StageKind::Wind) => {
+                let v = w.get_ref();
+                let schedule_ok = !v.schedule.is_empty()
+                    && v.schedule
+                        .iter()
+                        .all(|k| (0.0..=1.0).contains(&k.v) && k.frame >= 1)
+                    && v.schedule.windows(2).all(|p| p[1].frame > p[0].frame);
+                if !(v.fps.is_finite() && v.fps > 0.0 && v.direction.is_finite() && schedule_ok) {
+                    return fail(w.span(), "wind needs a finite direction, positive fps and a schedule of increasing frames (from 1) with v in [0, 1]".into());
+                }
+                if !v.head.radii.iter().all(|r| r.is_finite() && *r > 0.0)
+                    || !v.head.center.iter().all(|c| c.is_finite())
+                {
+                    return fail(
+                        w.span(),
+                        "wind head needs finite center and positive radii".into(),
+                    );
+                }
+            }
+            (Some(w), _) => only(true, w.span(), "wind", &[StageKind::Wind])?,
+            (None, StageKind::Wind) => {
+                return fail(
+                    stage.kind.span(),
+                    "a wind stage needs a `wind` table".into(),
+                )
+            }
+            (None, _) => {}
+        }
+        Ok(())
+    }
+}
+
+fn check_drive(
+    timeline: &Timeline,
+    drive: &Spanned<schema::BondDriveSpec>,
+) -> Result<(), TimelineError> {
+    let d = drive.get_ref();
+    if !((0.0..=1.0).contains(&d.target) && d.time.is_finite() && d.time > 0.0) {
+        return Err(timeline.error_at(
+            drive.span(),
+            "a drive needs target in [0, 1] and a positive time",
+        ));
+    }
+    Ok(())
+}
+
+fn error_at(
+    path: &Path,
+    text: &str,
+    span: Range<usize>,
+    message: impl Into<String>,
+) -> TimelineError {
+    let (line, column) = line_column(text, span.start);
+    TimelineError {
+        file: path.to_path_buf(),
+        line,
+        column,
+        message: message.into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load_text(text: &str) -> Result<Timeline, TimelineError> {
+        let dir = std::env::temp_dir().join(format!("groombake-timeline-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(format!("t{}.toml", text.len()));
+        std::fs::write(&path, text).unwrap();
+        let result = Timeline::load(&path);
+        let _ = std::fs::remove_file(&path);
+        result
+    }
+
+    const GOOD: &str = r#"
+[groom]
+generate = { strands = 4, layout = "swatch" }
+
+[[stage]]
+kind = "wet"
+duration = 0.5
+"#;
+
+    #[test]
+    fn good_timeline_loads() {
+        let t = load_text(GOOD).unwrap();
+        assert!((t.dt - 1.0 / 360.0).abs() < 1e-15);
+        assert_eq!(t.duration(), 0.5);
+    }
+
+    #[test]
+    fn typo_names_line_and_column() {
+        let text = GOOD.replace("duration = 0.5", "duration = 0.5\ndurtion = 1");
+        let e = load_text(&text).unwrap_err();
+        assert_eq!((e.line, e.column), (8, 1), "{e}");
+        assert!(e.message.contains("durtion"), "{e}");
+    }
+
+    #[test]
+    fn negative_duration_names_line_and_column() {
+        let e = load_text(&GOOD.replace("0.5", "-1.0")).unwrap_err();
+        assert_eq!((e.line, e.column), (7, 12), "{e}");
+        assert!(e.message.contains("duration must be positive"), "{e}");
+    }
+
+    #[test]
+    fn missing_groom_file_is_named() {
+        let text = GOOD.replace(
+            r#"generate = { strands = 4, layout = "swatch" }"#,
+            r#"source = "no/such.hair""#,
+        );
+        let e = load_text(&text).unwrap_err();
+        assert_eq!(e.line, 3);
+        assert!(e.message.contains("not found"), "{e}");
+    }
+
+    #[test]
+    fn fractional_dt_is_parsed() {
+        let t = load_text(&format!("{GOOD}\n[solver]\ndt = \"1/1000\"\n")).unwrap();
+        assert!((t.dt - 0.001).abs() < 1e-15);
+        let e = load_text(&format!("{GOOD}\n[solver]\ndt = \"1/0\"\n")).unwrap_err();
+        assert!(e.message.contains("dt"), "{e}");
+    }
+
+    #[test]
+    fn unknown_collider_in_stage_is_named() {
+        let text = GOOD.replace("duration = 0.5", "duration = 0.5\ncolliders = [\"pillow\"]");
+        let e = load_text(&text).unwrap_err();
+        assert!(e.message.contains("pillow"), "{e}");
+        assert_eq!(e.line, 8);
+    }
+}

@@ -1,0 +1,420 @@
+//! The TOML form of a timeline: serde types with unknown keys rejected.
+//! Values that are checked after parsing keep their span so an error can
+//! name the line and column.
+
+use crate::generate::GeneratorParameters;
+use serde::Deserialize;
+use serde_spanned::Spanned;
+use std::collections::BTreeMap;
+
+/// A whole timeline file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimelineFile {
+    /// Seed of every random process (the wind model); `--seed` overrides it.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    pub groom: GroomSpec,
+    #[serde(default)]
+    pub material: MaterialSpec,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default, rename = "collider")]
+    pub colliders: Vec<ColliderSpec>,
+    #[serde(rename = "stage")]
+    pub stages: Spanned<Vec<StageSpec>>,
+    #[serde(default, rename = "export")]
+    pub exports: Vec<ExportSpec>,
+}
+
+/// Where the groom comes from: a file (any importer, including a `state`
+/// export of an earlier bake) or the generator.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroomSpec {
+    /// A groom file, relative to the timeline file.
+    pub source: Option<Spanned<String>>,
+    /// Generator parameters (metres), instead of a file.
+    pub generate: Option<Spanned<GeneratorParameters>>,
+    /// Units of the source when the format does not say (`m`, `cm`, ...).
+    pub units: Option<Spanned<String>>,
+    /// Up axis of the source when the format does not say (`y` or `z`).
+    pub up: Option<Spanned<String>>,
+    /// Moves the groom after import (metres).
+    #[serde(default)]
+    pub translate: [f32; 3],
+}
+
+/// Bond influences `f_j` (fractions of the restoring force).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BondInfluences {
+    pub hydrogen: f32,
+    pub ionic: f32,
+    pub disulfide: f32,
+    pub peptide: f32,
+}
+
+impl Default for BondInfluences {
+    /// The paper's scene 3 split (hydrogen + ionic 63 %, disulfide 20 %,
+    /// peptide 17 %), with hydrogen 35 % and ionic 28 % (METHOD G's choice).
+    fn default() -> Self {
+        BondInfluences {
+            hydrogen: 0.35,
+            ionic: 0.28,
+            disulfide: 0.20,
+            peptide: 0.17,
+        }
+    }
+}
+
+impl BondInfluences {
+    pub fn as_array(&self) -> [f32; 4] {
+        [self.hydrogen, self.ionic, self.disulfide, self.peptide]
+    }
+}
+
+/// Material; defaults are the paper's Table 1.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialSpec {
+    /// Bending/twisting stiffness `k_o` at the root, in [0, 1].
+    pub stiffness: Spanned<f32>,
+    /// Cuticle peel rate: the fraction of cuticle lost per centimetre from the root.
+    pub cuticle_peel_per_cm: Spanned<f32>,
+    pub bonds: Spanned<BondInfluences>,
+}
+
+impl Default for MaterialSpec {
+    fn default() -> Self {
+        MaterialSpec {
+            stiffness: Spanned::new(0..0, 0.05),
+            cuticle_peel_per_cm: Spanned::new(0..0, 0.0033),
+            bonds: Spanned::new(0..0, BondInfluences::default()),
+        }
+    }
+}
+
+/// A time step written as seconds or as a fraction `"1/360"`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum TimeStep {
+    Seconds(f64),
+    Text(String),
+}
+
+impl TimeStep {
+    pub fn seconds(&self) -> Option<f64> {
+        match self {
+            TimeStep::Seconds(s) => Some(*s),
+            TimeStep::Text(text) => match text.split_once('/') {
+                Some((n, d)) => {
+                    let n: f64 = n.trim().parse().ok()?;
+                    let d: f64 = d.trim().parse().ok()?;
+                    Some(n / d)
+                }
+                None => text.trim().parse().ok(),
+            },
+        }
+    }
+}
+
+/// Damping rates, per second.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingSpec {
+    pub linear: f32,
+    pub angular: f32,
+}
+
+/// Hair-hair penalty of (20).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HairHairSpec {
+    pub strength: f32,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    pub dt: Spanned<TimeStep>,
+    pub iterations: Spanned<u32>,
+    /// Acceleration of gravity, m/s^2 (Y up).
+    pub gravity: [f32; 3],
+    /// Hair radius, metres (collision margin and hair-hair distance).
+    pub hair_radius: Spanned<f32>,
+    pub hair_hair: Option<Spanned<HairHairSpec>>,
+    pub damping: Spanned<DampingSpec>,
+    /// Quaternion inverse mass as `scale * w_p / l^2` (METHOD G).
+    pub quaternion_mass_scale: Spanned<f32>,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec {
+            dt: Spanned::new(0..0, TimeStep::Seconds(1.0 / 360.0)),
+            iterations: Spanned::new(0..0, 5),
+            gravity: [0.0, -9.8, 0.0],
+            hair_radius: Spanned::new(0..0, 4.0e-5),
+            hair_hair: None,
+            damping: Spanned::new(
+                0..0,
+                DampingSpec {
+                    linear: 2.0,
+                    angular: 2.0,
+                },
+            ),
+            quaternion_mass_scale: Spanned::new(0..0, 1.0),
+        }
+    }
+}
+
+/// A collider shape (rapier/parry). Capsules and cylinders stand along Y.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShapeSpec {
+    /// The half-space below a plane through the collider's origin.
+    HalfSpace {
+        normal: [f32; 3],
+    },
+    Cuboid {
+        half_extents: [f32; 3],
+    },
+    Ball {
+        radius: f32,
+    },
+    Capsule {
+        half_height: f32,
+        radius: f32,
+    },
+    Cylinder {
+        half_height: f32,
+        radius: f32,
+    },
+    /// A triangle mesh from `.obj` or `.glb`/`.gltf`, relative to the timeline.
+    Mesh {
+        path: String,
+        #[serde(default = "one")]
+        scale: f32,
+    },
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// A pose at a time (global timeline seconds).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeySpec {
+    pub t: f64,
+    #[serde(default)]
+    pub translation: [f32; 3],
+    /// Rotation as X, Y, Z Euler angles in degrees, applied X first.
+    #[serde(default)]
+    pub rotation: [f32; 3],
+}
+
+/// When a collider takes part.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ColliderActivity {
+    /// In every stage (a head).
+    #[default]
+    Always,
+    /// Only in the stages that list it (a pillow).
+    Listed,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderSpec {
+    pub name: Spanned<String>,
+    pub shape: Spanned<ShapeSpec>,
+    #[serde(default = "default_friction")]
+    pub friction: Spanned<f32>,
+    #[serde(default)]
+    pub active: ColliderActivity,
+    /// Keyframed kinematic motion; the pose is interpolated (linear
+    /// translation, spherical rotation) and held before the first and after
+    /// the last key. Without keys the collider stays at the origin.
+    #[serde(default = "no_motion")]
+    pub motion: Spanned<Vec<KeySpec>>,
+}
+
+fn no_motion() -> Spanned<Vec<KeySpec>> {
+    Spanned::new(0..0, Vec::new())
+}
+
+fn default_friction() -> Spanned<f32> {
+    Spanned::new(0..0, 0.3)
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum StageKind {
+    Wet,
+    Dry,
+    Press,
+    Perm,
+    Wash,
+    Wind,
+    Settle,
+    Release,
+}
+
+impl StageKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            StageKind::Wet => "wet",
+            StageKind::Dry => "dry",
+            StageKind::Press => "press",
+            StageKind::Perm => "perm",
+            StageKind::Wash => "wash",
+            StageKind::Wind => "wind",
+            StageKind::Settle => "settle",
+            StageKind::Release => "release",
+        }
+    }
+}
+
+/// Drives a bond kind toward `target` over `time` seconds (linearly).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BondDriveSpec {
+    pub target: f32,
+    pub time: f64,
+}
+
+/// The paper's blower (19), with (21) re-forming hydrogen bonds.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlowerSpec {
+    pub from: [f32; 3],
+    pub to: [f32; 3],
+    /// `alpha` of (19).
+    pub strength: f32,
+    /// The 0.003 of (21).
+    #[serde(default = "default_blower_rate")]
+    pub hydrogen_rate: f32,
+}
+
+fn default_blower_rate() -> f32 {
+    0.003
+}
+
+/// Perm rods: each strand is rolled from its tip toward its root onto a rod.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RodSpec {
+    /// Rod radius, metres.
+    pub radius: f32,
+    /// Arc length left unrolled at the root, metres.
+    pub root_gap: f32,
+    /// Fractions of the stage: rolling ends, cutting ends, re-bonding ends
+    /// (then the rods unroll and the hair is released).
+    pub phases: [f64; 3],
+    /// Fraction of the disulfide bonds the lotion cuts (the paper: 20 %).
+    pub disulfide_cut: f32,
+}
+
+impl Default for RodSpec {
+    fn default() -> Self {
+        RodSpec {
+            radius: 0.01,
+            root_gap: 0.02,
+            phases: [0.3, 0.4, 0.8],
+            disulfide_cut: 0.2,
+        }
+    }
+}
+
+/// One step of the wind strength schedule: `v` from model frame `frame` on.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindKey {
+    pub frame: u32,
+    pub v: f64,
+}
+
+/// The stochastic wind of `001_*`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    /// Flow direction `theta_u`, degrees (azimuth from +Z toward +X).
+    pub direction: f64,
+    /// Strength `V` per model frame (frames counted from 1).
+    pub schedule: Vec<WindKey>,
+    /// Model frames per second.
+    #[serde(default = "default_wind_fps")]
+    pub fps: f64,
+    /// The ellipsoid enclosing the head.
+    pub head: crate::stochastic_wind::WindHead,
+}
+
+fn default_wind_fps() -> f64 {
+    24.0
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StageSpec {
+    pub kind: Spanned<StageKind>,
+    pub name: Option<String>,
+    pub duration: Spanned<f64>,
+    /// Gravity on (default) or off in this stage.
+    #[serde(default = "yes")]
+    pub gravity: bool,
+    /// Colliders of `active = "listed"` that take part in this stage.
+    #[serde(default)]
+    pub colliders: Vec<Spanned<String>>,
+    /// Bond drives that replace the stage kind's defaults.
+    #[serde(default)]
+    pub bonds: BTreeMap<String, Spanned<BondDriveSpec>>,
+    /// Water content driven toward `target` over `time` (replaces the default).
+    pub wetness: Option<Spanned<BondDriveSpec>>,
+    /// `wet`/`wash`: shampoo also breaks the ionic bonds.
+    #[serde(default)]
+    pub shampoo: bool,
+    /// `dry`/`wash`: time for hydrogen bonds to re-form in air (seconds).
+    pub drying_time: Option<Spanned<f64>>,
+    /// `dry`: a blower.
+    pub blower: Option<Spanned<BlowerSpec>>,
+    /// `perm`: the rods.
+    pub rod: Option<Spanned<RodSpec>>,
+    /// `wind`: the stochastic wind.
+    pub wind: Option<Spanned<WindSpec>>,
+    /// Replaces the solver's damping in this stage.
+    pub damping: Option<DampingSpec>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ExportWhat {
+    /// Frames at `fps` over the whole timeline, streamed.
+    Animated,
+    /// The last pose.
+    Final,
+    /// The plastic rest shape (roots fixed, no gravity).
+    Rest,
+    /// Everything needed to continue in a later bake.
+    State,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExportSpec {
+    /// Output file, relative to `--out` (default: the current directory).
+    pub path: Spanned<String>,
+    pub what: ExportWhat,
+    /// Frames per second of an animated export.
+    pub fps: Option<Spanned<f64>>,
+    /// Units of the file (default: metres, or the format's convention).
+    pub units: Option<Spanned<String>>,
+    /// Up axis of the file (default y).
+    pub up: Option<Spanned<String>>,
+}
