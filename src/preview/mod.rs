@@ -766,13 +766,16 @@ impl Lights {
         // Mapped colours keep more ambient light so the ramp stays legible.
         let ambient = if mapped { 0.35 } else { 0.12 };
         let diffuse = ambient + 0.85 * key_diffuse + 0.3 * fill_diffuse;
-        let specular_strength = if mapped { 0.12 } else { 0.25 };
+        let specular_strength = if mapped { 0.12 } else { 0.2 };
+        // The sharp highlight is a warm white (light reflected at the cuticle);
+        // the broad one and the rim carry the hair's own colour (light that
+        // went through the fibre).
+        const HIGHLIGHT: [f32; 3] = [1.0, 0.9, 0.8];
         let mut color = [0.0; 3];
-        for k in 0..3 {
-            color[k] = base[k] * diffuse * occlusion
-                + specular_strength * key_specular * occlusion
-                + 0.5 * base[k] * key_broad * occlusion
-                + 0.15 * rim_specular * occlusion;
+        for ((c, b), h) in color.iter_mut().zip(base).zip(HIGHLIGHT) {
+            *c = (b * (diffuse + 0.5 * key_broad + 0.8 * rim_specular)
+                + specular_strength * h * key_specular)
+                * occlusion;
         }
         color
     }

@@ -22,7 +22,7 @@ fn hair_pixels(width: u32, pixels: &[u8]) -> Vec<(u32, u32)> {
         .chunks_exact(3)
         .enumerate()
         .filter(|(_, p)| {
-            let (r, g, b) = (p[0] as i32, p[1] as i32, p[2] as i32);
+            let (r, b) = (p[0] as i32, p[2] as i32);
             // The background is grey (r = g, b a little higher); hair is warm or bright.
             r - b > 6 || r > 150
         })
