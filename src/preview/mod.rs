@@ -469,7 +469,7 @@ impl<'o> Scene<'o> {
                 let mut vertices = self.shade(entry.groom, points, camera, colors.as_ref());
                 set_joints(entry.groom, &mut vertices);
                 let strands = strand_ranges(entry.groom, vertices.len());
-                let min_opacity = min_opacity(&vertices, width, height);
+                let min_opacity = min_opacity(&vertices, &strands, width, height);
                 Raster {
                     vertices: &vertices,
                     strands,
@@ -522,7 +522,7 @@ impl<'o> Scene<'o> {
         let depth_span = (far - near).max(1e-9);
         let range = self.range;
         let hair = self.options.hair_color;
-        let mut vertices = vec![ScreenVertex::default(); strand_of.len()];
+        let mut vertices = vec![ScreenVertex::INVALID; strand_of.len()];
         vertices.par_iter_mut().enumerate().for_each(|(i, vertex)| {
             let Some(&strand) = strand_of.get(i) else {
                 return;
@@ -583,9 +583,7 @@ impl<'o> Scene<'o> {
                 depth: projected.depth,
                 width: width * projected.pixels_per_unit,
                 joint: [0.0, 0.0],
-                strand: strand as u32,
                 color,
-                valid: true,
             };
         });
         vertices
@@ -660,17 +658,24 @@ fn strand_ranges(groom: &Groom, vertex_count: usize) -> Vec<(u32, u32)> {
 
 /// How opaque a sub-pixel hair is drawn: its true coverage where the hair
 /// piles up (dense grooms), more where strands are few, so both read.
-fn min_opacity(vertices: &[ScreenVertex], width: usize, height: usize) -> f32 {
-    let drawn: f64 = vertices
-        .par_windows(2)
-        .map(|pair| {
-            let (a, b) = (pair[0], pair[1]);
-            // Pairs across two strands are not segments; they are few, and
-            // skipping them needs the strand table.
-            if !(a.valid && b.valid) || a.strand != b.strand {
-                return 0.0;
-            }
-            f64::from(((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt())
+fn min_opacity(
+    vertices: &[ScreenVertex],
+    strands: &[(u32, u32)],
+    width: usize,
+    height: usize,
+) -> f32 {
+    let drawn: f64 = strands
+        .par_iter()
+        .map(|&(start, end)| {
+            let strand = vertices.get(start as usize..end as usize).unwrap_or(&[]);
+            strand
+                .windows(2)
+                .filter(|pair| pair[0].valid() && pair[1].valid())
+                .map(|pair| {
+                    let (a, b) = (pair[0], pair[1]);
+                    f64::from(((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt())
+                })
+                .sum::<f64>()
         })
         .sum();
     // Average number of 1 px hairs over a pixel of the framed area.

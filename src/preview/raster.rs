@@ -8,8 +8,8 @@
 
 use rayon::prelude::*;
 
-/// A projected, shaded strand vertex.
-#[derive(Debug, Clone, Copy, Default)]
+/// A projected, shaded strand vertex. Kept small: the bands copy them.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct ScreenVertex {
     pub x: f32,
     pub y: f32,
@@ -21,18 +21,31 @@ pub(crate) struct ScreenVertex {
     pub joint: [f32; 2],
     /// Linear RGB after shading.
     pub color: [f32; 3],
-    /// The strand it belongs to.
-    pub strand: u32,
-    /// False when the vertex did not project (not finite, behind the camera).
-    pub valid: bool,
+}
+
+impl ScreenVertex {
+    /// A vertex that did not project (not finite, behind the camera).
+    pub const INVALID: ScreenVertex = ScreenVertex {
+        x: f32::NAN,
+        y: f32::NAN,
+        depth: f32::NAN,
+        width: 0.0,
+        joint: [0.0; 2],
+        color: [0.0; 3],
+    };
+
+    pub fn valid(&self) -> bool {
+        self.x.is_finite()
+    }
 }
 
 /// Rows per band: small enough for a band's accumulation buffer to stay in
 /// cache, large enough that few segments straddle bands.
 const BAND_ROWS: usize = 16;
 
-/// Bands binned at once.
-const GROUP_BANDS: usize = 16;
+/// Bands a thread bins and draws together: enough groups to share out
+/// between threads, few enough that each pass over the strands pays.
+const GROUP_BANDS: usize = 8;
 
 /// How segments of a picture are drawn.
 pub(crate) struct Raster<'a> {
@@ -124,7 +137,7 @@ impl Raster<'_> {
                 let strand = vertices.get(start as usize..end as usize).unwrap_or(&[]);
                 let (sum, count) = strand
                     .iter()
-                    .filter(|v| v.valid)
+                    .filter(|v| v.valid())
                     .fold((0f64, 0u32), |(sum, count), v| {
                         (sum + f64::from(v.depth), count + 1)
                     });
@@ -146,7 +159,7 @@ impl Raster<'_> {
             .par_iter()
             .map(|&(start, end)| {
                 let strand = vertices.get(start as usize..end as usize).unwrap_or(&[]);
-                strand.iter().filter(|v| v.valid).fold(
+                strand.iter().filter(|v| v.valid()).fold(
                     [f32::INFINITY, f32::NEG_INFINITY],
                     |[top, bottom], v| {
                         let reach = 0.5 * v.width.max(1.0) + 1.0;
@@ -159,44 +172,48 @@ impl Raster<'_> {
         let encode = SrgbTable::new();
         let width = self.width;
         let mut out = vec![0u8; width * self.height * 3];
-        // Bands are drawn a group at a time: each band gets its own copy of
-        // its segments, in order, so drawing reads memory in sequence, and
-        // copies of only one group at a time bound the memory that takes.
+        // Rows go in groups of bands, a group to a thread. Each band of a
+        // group gets its own copy of its segments, in order, so drawing reads
+        // memory in sequence; copies of only the groups in flight bound the
+        // memory that takes.
         let group_rows = BAND_ROWS * GROUP_BANDS;
-        let mut bands: Vec<Vec<(ScreenVertex, ScreenVertex)>> = vec![Vec::new(); GROUP_BANDS];
-        for (group_index, group) in out.chunks_mut(width * group_rows * 3).enumerate() {
-            let group_row0 = group_index * group_rows;
-            let group_row_count = group.len() / (width * 3);
-            self.bin(&order, &extents, group_row0, group_row_count, &mut bands);
-            group
-                .par_chunks_mut(width * BAND_ROWS * 3)
-                .zip(bands.par_iter())
-                .enumerate()
-                .for_each_init(Vec::new, |buffer, (band_index, (rows, segments))| {
-                    let row0 = group_row0 + band_index * BAND_ROWS;
-                    let row_count = rows.len() / (width * 3);
-                    // Reused between the bands a thread draws: fresh pages cost more than drawing.
-                    buffer.clear();
-                    buffer.resize(width * row_count, [EMPTY; LAYERS]);
-                    let buffer = buffer.as_mut_slice();
-                    for (a, b) in segments {
-                        self.draw_segment(a, b, row0, row_count, buffer);
-                    }
-                    for (r, (line, bytes)) in buffer
-                        .chunks_exact(width)
-                        .zip(rows.chunks_exact_mut(width * 3))
+        out.par_chunks_mut(width * group_rows * 3)
+            .enumerate()
+            .for_each_init(
+                || (vec![Vec::new(); GROUP_BANDS], Vec::new()),
+                |(bands, buffer), (group_index, group)| {
+                    let group_row0 = group_index * group_rows;
+                    let group_row_count = group.len() / (width * 3);
+                    self.bin(&order, &extents, group_row0, group_row_count, bands);
+                    for (band_index, (rows, segments)) in group
+                        .chunks_mut(width * BAND_ROWS * 3)
+                        .zip(bands.iter())
                         .enumerate()
                     {
-                        let back = background(row0 + r);
-                        for (pixel, rgb) in line.iter().zip(bytes.chunks_exact_mut(3)) {
-                            let color = resolve(pixel, back);
-                            for k in 0..3 {
-                                rgb[k] = encode.encode(color[k]);
+                        let row0 = group_row0 + band_index * BAND_ROWS;
+                        let row_count = rows.len() / (width * 3);
+                        // Reused between bands: fresh pages cost more than drawing.
+                        buffer.clear();
+                        buffer.resize(width * row_count, [EMPTY; LAYERS]);
+                        for (a, b) in segments {
+                            self.draw_segment(a, b, row0, row_count, buffer);
+                        }
+                        for (r, (line, bytes)) in buffer
+                            .chunks_exact(width)
+                            .zip(rows.chunks_exact_mut(width * 3))
+                            .enumerate()
+                        {
+                            let back = background(row0 + r);
+                            for (pixel, rgb) in line.iter().zip(bytes.chunks_exact_mut(3)) {
+                                let color = resolve(pixel, back);
+                                for (byte, c) in rgb.iter_mut().zip(color) {
+                                    *byte = encode.encode(c);
+                                }
                             }
                         }
                     }
-                });
-        }
+                },
+            );
         out
     }
 
@@ -228,7 +245,7 @@ impl Raster<'_> {
                 .unwrap_or(&[]);
             for pair in vertices.windows(2) {
                 let (a, b) = (pair[0], pair[1]);
-                if !(a.valid && b.valid) {
+                if !(a.valid() && b.valid()) {
                     continue;
                 }
                 let reach = 0.5 * a.width.max(b.width).max(1.0) + 1.0;
