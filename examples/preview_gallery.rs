@@ -3,7 +3,7 @@
 
 use groom::{Attribute, AttributeValues, Groom};
 use groombake::generate::{generate, GeneratorParameters, RootLayout, StrandShape};
-use groombake::preview::{render, write_png, PreviewOptions, View};
+use groombake::preview::{render, render_sheet, write_png, PreviewOptions, SheetEntry, View};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -62,5 +62,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..PreviewOptions::default()
     };
     write_png(&render(&coloured, &options)?, &dir.join("coloured.png"))?;
+    // A contact sheet of a swatch swinging to +X, coloured by strand.
+    let mut swing = make(2_000, RootLayout::Swatch, StrandShape::Wavy)?;
+    let order: Vec<f32> = (0..swing.strand_count()).map(|s| s as f32).collect();
+    swing.set_attribute(Attribute::per_strand(
+        "strand",
+        AttributeValues::Float(order),
+    ));
+    swing.frames = (0..3)
+        .map(|f| groom::Frame {
+            time: f as f64,
+            points: swing
+                .points
+                .iter()
+                .map(|p| [p[0] - 0.4 * f as f32 * p[1], p[1], p[2]])
+                .collect(),
+        })
+        .collect();
+    let labels = ["frame 0", "frame 1", "frame 2"];
+    let entries: Vec<SheetEntry> = labels
+        .iter()
+        .enumerate()
+        .map(|(frame, label)| SheetEntry {
+            label,
+            groom: &swing,
+            frame: Some(frame),
+        })
+        .collect();
+    let options = PreviewOptions {
+        width: 320,
+        height: 320,
+        view: View::Front,
+        color_by: Some("strand".into()),
+        ..PreviewOptions::default()
+    };
+    write_png(&render_sheet(&entries, &options)?, &dir.join("sheet.png"))?;
     Ok(())
 }
