@@ -3,6 +3,7 @@
 //! these.
 
 pub mod generate;
+pub mod preview;
 pub mod sim;
 pub mod stochastic_wind;
 pub mod timeline;

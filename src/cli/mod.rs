@@ -6,6 +6,7 @@ mod bench;
 mod convert;
 mod generate;
 mod inspect;
+mod preview;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -35,6 +36,8 @@ enum Command {
     Validate(bake::ValidateArgs),
     /// Times the solver on a generated groom.
     Bench(bench::BenchArgs),
+    /// Draws a groom (or a sheet of its frames) to a PNG picture.
+    Preview(preview::PreviewArgs),
 }
 
 /// Bad input or usage: exit code 2.
@@ -63,6 +66,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Bake(a) => bake::run_bake(a),
         Command::Validate(a) => bake::run_validate(a),
         Command::Bench(a) => bench::run(a),
+        Command::Preview(a) => preview::run(a),
     }
 }
 

@@ -12,4 +12,5 @@ mod bench;
 mod cli;
 mod formats;
 mod golden;
+mod preview;
 mod usd;

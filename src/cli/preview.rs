@@ -1,0 +1,97 @@
+//! `groombake preview FILE -o OUT.png [--frame F | --frames a,b,c] [--color ATTR]
+//! [--size WxH] [--view front|side|top|persp]`.
+
+use super::BadInput;
+use clap::Args;
+use groombake::preview::{self, PreviewError, PreviewOptions, SheetEntry, View, MAX_SIZE};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Args)]
+pub struct PreviewArgs {
+    /// The groom file.
+    file: PathBuf,
+    /// The picture to write (PNG).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Draw this time sample (0-based) instead of the rest pose.
+    #[arg(long, conflicts_with = "frames")]
+    frame: Option<usize>,
+    /// A contact sheet of these time samples side by side, each labelled.
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    frames: Vec<usize>,
+    /// Colour strands by this scalar attribute (blue = low, red = high), with a legend.
+    #[arg(long)]
+    color: Option<String>,
+    /// Picture size in pixels, WIDTHxHEIGHT (each 1 to 16384).
+    #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Where the camera looks from (Y up): front, side, top or persp.
+    #[arg(long, default_value = "front")]
+    view: View,
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let bad = || {
+        format!(
+            "'{text}' is not a size: expected WIDTHxHEIGHT, each 1 to {MAX_SIZE}, e.g. 1024x768"
+        )
+    };
+    let (width, height) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let width: u32 = width.trim().parse().map_err(|_| bad())?;
+    let height: u32 = height.trim().parse().map_err(|_| bad())?;
+    if !(1..=MAX_SIZE).contains(&width) || !(1..=MAX_SIZE).contains(&height) {
+        return Err(bad());
+    }
+    Ok((width, height))
+}
+
+pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
+    let is_png = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        return Err(BadInput(format!(
+            "{}: the preview is a PNG picture: name the output *.png",
+            args.output.display()
+        ))
+        .into());
+    }
+    let groom = super::read_groom(&args.file)?;
+    let options = PreviewOptions {
+        width: args.size.0,
+        height: args.size.1,
+        view: args.view,
+        frame: args.frame,
+        color_by: args.color.clone(),
+        ..PreviewOptions::default()
+    };
+    let image = if args.frames.is_empty() {
+        preview::render(&groom, &options)
+    } else {
+        let labels: Vec<String> = args.frames.iter().map(|f| format!("frame {f}")).collect();
+        let entries: Vec<SheetEntry> = args
+            .frames
+            .iter()
+            .zip(&labels)
+            .map(|(&frame, label)| SheetEntry {
+                label,
+                groom: &groom,
+                frame: Some(frame),
+            })
+            .collect();
+        preview::render_sheet(&entries, &options)
+    }
+    .map_err(|error| explain(&args.file, error))?;
+    preview::write_png(&image, &args.output)?;
+    Ok(())
+}
+
+/// Bad requests become exit code 2, naming the file they concern.
+fn explain(file: &Path, error: PreviewError) -> anyhow::Error {
+    if error.is_bad_input() {
+        BadInput(format!("{}: {error}", file.display())).into()
+    } else {
+        error.into()
+    }
+}

@@ -1,0 +1,187 @@
+//! `groombake preview`: pictures of grooms, contact sheets of frames.
+
+use crate::util::{shared_data, TestDir};
+use groom::{Attribute, AttributeValues, Frame};
+use groombake::generate::{generate, GeneratorParameters, RootLayout, StrandShape};
+use std::path::Path;
+
+/// Width, height and RGB pixels of a PNG written by preview.
+fn decode(path: &Path) -> (u32, u32, Vec<u8>) {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let mut reader = png::Decoder::new(file).read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut pixels).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    pixels.truncate(info.buffer_size());
+    (info.width, info.height, pixels)
+}
+
+/// Pixels that are not the neutral grey background: coloured or far from grey.
+fn hair_pixels(width: u32, pixels: &[u8]) -> Vec<(u32, u32)> {
+    pixels
+        .chunks_exact(3)
+        .enumerate()
+        .filter(|(_, p)| {
+            let (r, b) = (p[0] as i32, p[2] as i32);
+            // The background is grey (r = g, b a little higher); hair is warm or bright.
+            r - b > 6 || r > 150
+        })
+        .map(|(i, _)| (i as u32 % width, i as u32 / width))
+        .collect()
+}
+
+/// A small animated groom as a glTF file: a swatch that swings to +X.
+fn animated_swatch(dir: &TestDir) -> String {
+    let mut groom = generate(&GeneratorParameters {
+        strands: 300,
+        layout: RootLayout::Swatch,
+        shape: StrandShape::Wavy,
+        ..GeneratorParameters::default()
+    })
+    .unwrap();
+    let heat: Vec<f32> = (0..groom.strand_count()).map(|s| s as f32).collect();
+    groom.set_attribute(Attribute::per_strand(
+        "bond_hydrogen",
+        AttributeValues::Float(heat),
+    ));
+    let frames: Vec<Frame> = (0..3)
+        .map(|f| Frame {
+            time: f as f64 / 24.0,
+            points: groom
+                .points
+                .iter()
+                .map(|p| [p[0] + 0.03 * f as f32 * -p[1], p[1], p[2]])
+                .collect(),
+        })
+        .collect();
+    let path = dir.path("swing.glb");
+    let options = exporters::AnimationOptions {
+        fps: 24.0,
+        frame_count: frames.len(),
+    };
+    let mut writer = exporters::animated(&path, &groom, options).unwrap();
+    for frame in &frames {
+        writer.write_frame(frame).unwrap();
+    }
+    writer.finish().unwrap();
+    "swing.glb".to_string()
+}
+
+#[test]
+fn shows_the_bangs() {
+    let dir = TestDir::new();
+    let bangs = shared_data("hairutil_Bangs_100.hair");
+    dir.run_ok(&["preview", bangs.to_str().unwrap(), "-o", "p.png"]);
+    let (width, height, pixels) = decode(&dir.path("p.png"));
+    assert_eq!((width, height), (1024, 1024));
+    let hair = hair_pixels(width, &pixels);
+    // 100 strands of about 11 vertices, drawn across most of the picture.
+    assert!(hair.len() > 5_000, "{} hair pixels", hair.len());
+    let min_x = hair.iter().map(|p| p.0).min().unwrap();
+    let max_x = hair.iter().map(|p| p.0).max().unwrap();
+    let min_y = hair.iter().map(|p| p.1).min().unwrap();
+    let max_y = hair.iter().map(|p| p.1).max().unwrap();
+    assert!(min_x > 0 && min_y > 0 && max_x < width - 1 && max_y < height - 1);
+    assert!(max_x - min_x > width / 2 || max_y - min_y > height / 2);
+    // No temporary file is left beside the picture.
+    let names: Vec<_> = std::fs::read_dir(dir.root()).unwrap().collect();
+    assert_eq!(names.len(), 1);
+}
+
+#[test]
+fn same_input_same_bytes() {
+    let dir = TestDir::new();
+    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = bangs.to_str().unwrap();
+    for (name, view) in [("a.png", "persp"), ("b.png", "persp"), ("c.png", "top")] {
+        dir.run_ok(&[
+            "preview", bangs, "-o", name, "--view", view, "--size", "300x200",
+        ]);
+    }
+    let a = std::fs::read(dir.path("a.png")).unwrap();
+    assert_eq!(a, std::fs::read(dir.path("b.png")).unwrap());
+    assert_ne!(a, std::fs::read(dir.path("c.png")).unwrap());
+    assert_eq!(decode(&dir.path("c.png")).0, 300);
+}
+
+#[test]
+fn sheet_of_frames_coloured_by_an_attribute() {
+    let dir = TestDir::new();
+    let file = animated_swatch(&dir);
+    dir.run_ok(&[
+        "preview",
+        &file,
+        "-o",
+        "sheet.png",
+        "--frames",
+        "0,2",
+        "--size",
+        "200x150",
+        "--color",
+        "bond_hydrogen",
+    ]);
+    let (width, height, pixels) = decode(&dir.path("sheet.png"));
+    // Two pictures side by side, with a label strip above them.
+    assert!(width > 400 && width < 420, "{width}");
+    assert!(height > 150 && height < 190, "{height}");
+    // Both ends of the ramp appear (the strands and the legend).
+    let red = pixels
+        .chunks_exact(3)
+        .filter(|p| p[0] > 120 && p[2] < 60 && p[1] < 60)
+        .count();
+    let blue = pixels
+        .chunks_exact(3)
+        .filter(|p| p[2] > 120 && p[0] < 60)
+        .count();
+    assert!(red > 50 && blue > 50, "red {red}, blue {blue}");
+    // One frame alone is a single picture.
+    dir.run_ok(&[
+        "preview", &file, "-o", "one.png", "--frame", "1", "--size", "200x150",
+    ]);
+    assert_eq!(decode(&dir.path("one.png")).0, 200);
+}
+
+#[test]
+fn bad_requests_exit_2_with_a_reason() {
+    let dir = TestDir::new();
+    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = bangs.to_str().unwrap();
+    let stderr = dir.run_fail(
+        &["preview", bangs, "-o", "p.png", "--color", "bond_hydrogen"],
+        2,
+    );
+    assert!(
+        stderr.contains("bond_hydrogen") && stderr.contains("hairutil_Bangs_100.hair"),
+        "{stderr}"
+    );
+    for size in ["0x100", "100x0", "16385x10", "big", "100x"] {
+        let stderr = dir.run_fail(&["preview", bangs, "-o", "p.png", "--size", size], 2);
+        assert!(stderr.contains("WIDTHxHEIGHT"), "{size}: {stderr}");
+    }
+    let stderr = dir.run_fail(&["preview", bangs, "-o", "p.png", "--frame", "3"], 2);
+    assert!(
+        stderr.contains("frame 3") && stderr.contains("0 frames"),
+        "{stderr}"
+    );
+    let stderr = dir.run_fail(&["preview", bangs, "-o", "p.png", "--frames", "0,x"], 2);
+    assert!(stderr.contains("--frames"), "{stderr}");
+    let stderr = dir.run_fail(&["preview", bangs, "-o", "p.png", "--view", "diagonal"], 2);
+    assert!(stderr.contains("front, side, top or persp"), "{stderr}");
+    let stderr = dir.run_fail(&["preview", bangs, "-o", "p.jpg"], 2);
+    assert!(stderr.contains("png"), "{stderr}");
+    dir.run_fail(&["preview", "nowhere.hair", "-o", "p.png"], 2);
+    // Nothing was written by any of these.
+    assert_eq!(std::fs::read_dir(dir.root()).unwrap().count(), 0);
+}
+
+#[test]
+fn unknown_frame_of_an_animation_is_refused() {
+    let dir = TestDir::new();
+    let file = animated_swatch(&dir);
+    let stderr = dir.run_fail(&["preview", &file, "-o", "p.png", "--frames", "0,7"], 2);
+    assert!(
+        stderr.contains("frame 7") && stderr.contains("3 frames"),
+        "{stderr}"
+    );
+    assert!(!dir.path("p.png").exists());
+}
