@@ -20,6 +20,7 @@ mod bonds;
 mod colliders;
 mod constraints;
 mod forces;
+mod lanes;
 mod math;
 mod quarantine;
 mod rest_pose;

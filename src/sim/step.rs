@@ -11,6 +11,7 @@ use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
 use super::forces::{blower_dv, EdgeGrid};
+use super::lanes::{Group, LaneInput, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
@@ -211,36 +212,17 @@ impl Solver {
             root_transform: strands.root_transform,
         };
         let views = split_strands(strands, &active);
-        // Strands go in pairs (see `step_pair`); the pairing is fixed by
-        // strand order, so results do not depend on the thread count.
+        // Strands go in groups of four (see `step_group`); a strand's
+        // result does not depend on its group, so not on the thread count.
         let failed: Vec<usize> = views
             .into_par_iter()
-            .chunks(2)
-            .with_min_len(8)
+            .chunks(LANES)
+            .with_min_len(4)
             .map_init(
-                || (Work::default(), Work::default()),
-                |(wa, wb), mut pair| {
-                    let second = pair.pop();
-                    let first = pair.pop();
-                    let mut failed = [None, None];
-                    match (first, second) {
-                        (Some(a), Some(b)) => {
-                            let (ia, ib) = (a.index, b.index);
-                            let (ok_a, ok_b) = step_pair(&context, a, b, wa, wb);
-                            failed = [(!ok_a).then_some(ia), (!ok_b).then_some(ib)];
-                        }
-                        (None, Some(a)) | (Some(a), None) => {
-                            let index = a.index;
-                            if a.active && !step_strand(&context, a, wa) {
-                                failed[0] = Some(index);
-                            }
-                        }
-                        (None, None) => {}
-                    }
-                    failed
-                },
+                || (std::array::from_fn(|_| Work::default()), Group::default()),
+                |(works, group), strands| step_group(&context, strands, works, group),
             )
-            .flat_map_iter(|f| f.into_iter().flatten())
+            .flat_map_iter(|f| f.into_iter())
             .collect();
         for &strand in &failed {
             strands.frozen[strand] = true;
@@ -400,7 +382,6 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         work.db[j] = db;
         work.rest[j] = rest_darboux(omega, &effective, &joint.memories, &ctx.influences);
     }
-
 }
 
 /// Per-strand sweep state carried in registers: the current edge's first
@@ -457,31 +438,16 @@ impl Work {
         }
         for i in 1..n {
             if self.w[i] > 0.0 {
-                self.p[i] = project(ctx.colliders, self.p[i], Some(self.x[i]), ctx.radius, ctx.dt);
+                self.p[i] = project(
+                    ctx.colliders,
+                    self.p[i],
+                    Some(self.x[i]),
+                    ctx.radius,
+                    ctx.dt,
+                );
             }
         }
     }
-}
-
-/// Two strands' sweeps in lockstep: each strand's arithmetic is exactly
-/// that of `Work::sweep`, but the two independent dependency chains
-/// overlap in the processor.
-fn sweep_pair(a: &mut Work, ma: usize, b: &mut Work, mb: usize) {
-    let mut sa = a.sweep_begin();
-    let mut sb = b.sweep_begin();
-    let common = ma.min(mb);
-    for e in 1..common {
-        a.sweep_edge(e, &mut sa);
-        b.sweep_edge(e, &mut sb);
-    }
-    for e in common.max(1)..ma {
-        a.sweep_edge(e, &mut sa);
-    }
-    for e in common.max(1)..mb {
-        b.sweep_edge(e, &mut sb);
-    }
-    a.sweep_end(ma, sa);
-    b.sweep_end(mb, sb);
 }
 
 /// One strand's step. Returns false (and commits nothing) when its new
@@ -500,29 +466,64 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
     finish(ctx, s, work)
 }
 
-/// Two strands' steps, their constraint sweeps interleaved; bit-identical
-/// to `step_strand` on each.
-fn step_pair(
+/// Four strands' steps with their constraint sweeps in SIMD lanes when
+/// they are all active and of one vertex count (bit-identical to
+/// `step_strand` on each); otherwise one by one. Returns the failed ones.
+fn step_group(
     ctx: &Context<'_>,
-    a: StrandMut<'_>,
-    b: StrandMut<'_>,
-    wa: &mut Work,
-    wb: &mut Work,
-) -> (bool, bool) {
-    let (na, nb) = (a.positions.len(), b.positions.len());
-    if na < 2 || nb < 2 || !a.active || !b.active {
-        let ok_a = !a.active || step_strand(ctx, a, wa);
-        let ok_b = !b.active || step_strand(ctx, b, wb);
-        return (ok_a, ok_b);
+    strands: Vec<StrandMut<'_>>,
+    works: &mut [Work; LANES],
+    group: &mut Group,
+) -> Vec<usize> {
+    let n = strands.first().map_or(0, |s| s.positions.len());
+    let uniform = strands.len() == LANES
+        && n >= 2
+        && strands.iter().all(|s| s.active && s.positions.len() == n);
+    let mut failed = Vec::new();
+    if !uniform {
+        for (s, work) in strands.into_iter().zip(works.iter_mut()) {
+            let index = s.index;
+            if s.active && !step_strand(ctx, s, work) {
+                failed.push(index);
+            }
+        }
+        return failed;
     }
-    prepare(ctx, &a, wa);
-    prepare(ctx, &b, wb);
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        prepare(ctx, s, work);
+    }
+    let m = n - 1;
+    group.load_constants(lane_inputs(works, n), n);
+    let colliding = !ctx.colliders.is_empty();
     for _ in 0..ctx.iterations {
-        sweep_pair(wa, na - 1, wb, nb - 1);
-        wa.collide(ctx, na);
-        wb.collide(ctx, nb);
+        group.sweep();
+        if colliding {
+            for (lane, work) in works.iter_mut().enumerate() {
+                group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+                work.collide(ctx, n);
+            }
+            group.load_state(&lane_inputs(works, n), n);
+        }
     }
-    (finish(ctx, a, wa), finish(ctx, b, wb))
+    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+        group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+        let index = s.index;
+        if !finish(ctx, s, work) {
+            failed.push(index);
+        }
+    }
+    failed
+}
+
+fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {
+    let m = n - 1;
+    std::array::from_fn(|l| LaneInput {
+        p: &works[l].p[..n],
+        q: &works[l].q[..m],
+        stretch: &works[l].stretch[..m],
+        rest: &works[l].rest[..m],
+        bend: &works[l].bend[..m],
+    })
 }
 
 /// After the iterations: inextensibility, final collisions, velocities,

@@ -700,3 +700,51 @@ fn bad_input_is_refused_with_a_reason() {
         .unwrap();
     assert_eq!(set.positions()[0], [0.0, 0.0, 0.0]);
 }
+
+#[test]
+fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
+    let groom = generate(&GeneratorParameters {
+        strands: 8,
+        shape: StrandShape::Wavy,
+        ..Default::default()
+    })
+    .unwrap();
+    // The same strands, each followed by a one-point strand so no group of
+    // four is uniform and every strand takes the scalar path.
+    let mut mixed = Vec::new();
+    for strand in groom.strands() {
+        mixed.push(strand.to_vec());
+        mixed.push(vec![[0.0, 1.0, 0.0]]);
+    }
+    let alone = metres(Groom::from_strands(&mixed));
+    let mut grouped_set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let mut alone_set = StrandSet::from_groom(&alone, &Material::default()).unwrap();
+    let mut solver = Solver::new(SolverParameters {
+        hair_radius: 1e-3,
+        ..SolverParameters::default()
+    })
+    .unwrap();
+    let colliders = head_and_pillow();
+    let env = Environment {
+        blower: Some(Blower {
+            from: [0.3, 0.2, 0.0],
+            to: [0.0, 0.0, 0.0],
+            strength: 6.0,
+            hydrogen_rate: 0.003,
+        }),
+        bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
+        ..Environment::default()
+    };
+    for _ in 0..80 {
+        solver.step(&mut grouped_set, &colliders, &env).unwrap();
+        solver.step(&mut alone_set, &colliders, &env).unwrap();
+    }
+    for s in 0..8 {
+        let g = grouped_set.strand_range(s).unwrap();
+        let a = alone_set.strand_range(2 * s).unwrap();
+        assert!(grouped_set.positions()[g.clone()] == alone_set.positions()[a.clone()]);
+        assert!(grouped_set.edge_rotations()[g] == alone_set.edge_rotations()[a]);
+    }
+    // They did move.
+    assert!(grouped_set.positions() != groom.points.as_slice());
+}
