@@ -748,3 +748,65 @@ fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
     // They did move.
     assert!(grouped_set.positions() != groom.points.as_slice());
 }
+
+#[test]
+fn a_blower_dries_hydrogen_bonds_where_it_blows() {
+    // (21): db_hyd = 0.003 |dv_w| per step while b_hyd < 1.
+    let mut set =
+        StrandSet::from_groom(&groom_of(arc_points(24, 0.0)), &Material::default()).unwrap();
+    set.set_all_bond_rates(BondKind::Hydrogen, 0.0);
+    let mut solver = Solver::new(SolverParameters::default()).unwrap();
+    let blower = Blower {
+        from: [0.1, 0.0, -0.5],
+        to: [0.1, 0.0, 0.0],
+        strength: 40.0,
+        hydrogen_rate: 0.003,
+    };
+    let env = Environment {
+        gravity: Gravity::Off,
+        blower: Some(blower),
+        ..Environment::default()
+    };
+    let colliders = ColliderSet::new();
+    let before = set.positions().to_vec();
+    solver.step(&mut set, &colliders, &env).unwrap();
+    let rates = set.bond_rates(BondKind::Hydrogen);
+    // The wind is along +z, across the strand (along +x): sin(theta) = 1,
+    // d = |x - 0.1| off the axis.
+    for (j, rate) in rates.iter().enumerate().take(24).skip(1) {
+        let d = (before[j][0] - 0.1f32).abs();
+        let dv = 40.0 / ((d + 1.0) * (d + 1.0)) / 360.0;
+        assert!(
+            (rate - 0.003 * dv).abs() < 1e-7,
+            "joint {j}: {rate} vs {}",
+            0.003 * dv
+        );
+    }
+    // And it pushes the hair downwind.
+    assert!(set.positions()[24][2] > 0.0);
+}
+
+#[test]
+fn hair_hair_penalty_pushes_close_strands_apart() {
+    // Two parallel strands 1 mm apart with a 1 mm hair radius (contact
+    // below 2 mm): they separate; without the penalty they do not.
+    let a = arc_points(10, 0.0);
+    let b: Vec<V3> = a.iter().map(|p| [p[0], p[1], p[2] + 0.001]).collect();
+    let groom = metres(Groom::from_strands([a, b]));
+    let gap = |strength: Option<f32>| {
+        let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+        let mut solver = Solver::new(SolverParameters {
+            hair_radius: 1e-3,
+            hair_hair_strength: strength,
+            ..SolverParameters::default()
+        })
+        .unwrap();
+        run(&mut solver, &mut set, &quiet(), 0.2);
+        set.positions()[21][2] - set.positions()[10][2]
+    };
+    let apart = gap(Some(5.0));
+    let untouched = gap(None);
+    eprintln!("tip gap with penalty {apart}, without {untouched}");
+    assert!((untouched - 0.001).abs() < 1e-6);
+    assert!(apart > 0.0015, "{apart}");
+}
