@@ -11,7 +11,7 @@ pub(crate) const BEND_DEADBAND2: f32 = 1.0e-14;
 /// renormalisation.
 pub(crate) const NEWTON_RANGE: f32 = 1.0e-3;
 /// Relative length error the inextensibility pass leaves alone.
-const LENGTH_DEADBAND: f32 = 2.0e-6;
+pub(crate) const LENGTH_DEADBAND: f32 = 2.0e-6;
 
 /// The per-step constants of one edge's stretch/shear constraint (the
 /// inverse masses do not change during a step).

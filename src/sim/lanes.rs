@@ -3,7 +3,9 @@
 //! `constraints.rs` in the same order (branches become selects), so a
 //! strand's result is bit-identical whether it runs alone or in a group.
 
-use super::constraints::{StretchCoefficients, BEND_DEADBAND2, NEWTON_RANGE, STRETCH_DEADBAND2};
+use super::constraints::{
+    StretchCoefficients, BEND_DEADBAND2, LENGTH_DEADBAND, NEWTON_RANGE, STRETCH_DEADBAND2,
+};
 use super::math::{Quat, V3};
 use std::ops::{Add, Mul, Neg, Sub};
 
@@ -241,6 +243,9 @@ pub struct Group {
     rest: Vec<P4>,
     bend_a: Vec<F4>,
     bend_b: Vec<F4>,
+    w: Vec<F4>,
+    l: Vec<F4>,
+    corrections: Vec<P4>,
 }
 
 /// What the group reads from one strand's working copy.
@@ -250,6 +255,9 @@ pub struct LaneInput<'a> {
     pub stretch: &'a [StretchCoefficients],
     pub rest: &'a [V3],
     pub bend: &'a [[f32; 2]],
+    /// Vertex inverse masses and rest lengths (for Follow-The-Leader).
+    pub w: &'a [f32],
+    pub l: &'a [f32],
 }
 
 impl Group {
@@ -261,7 +269,13 @@ impl Group {
         self.rest.clear();
         self.bend_a.clear();
         self.bend_b.clear();
+        self.w.clear();
+        self.l.clear();
+        for i in 0..n {
+            self.w.push(F4(std::array::from_fn(|l| lanes[l].w[i])));
+        }
         for e in 0..m {
+            self.l.push(F4(std::array::from_fn(|l| lanes[l].l[e])));
             self.stretch.push(Stretch4::gather([
                 &lanes[0].stretch[e],
                 &lanes[1].stretch[e],
@@ -302,6 +316,39 @@ impl Group {
         }
         for (out, v) in q.iter_mut().zip(&self.q) {
             *out = [v[0].0[lane], v[1].0[lane], v[2].0[lane], v[3].0[lane]];
+        }
+    }
+
+    /// `follow_the_leader` of constraints.rs, per lane.
+    pub fn follow_the_leader(&mut self) {
+        let n = self.p.len();
+        if self.w.len() != n || self.l.len() + 1 != n {
+            return;
+        }
+        let zero = F4::splat(0.0);
+        self.corrections.clear();
+        self.corrections.resize(n, [zero; 3]);
+        for i in 1..n {
+            let a = self.p[i - 1];
+            let b = self.p[i];
+            let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let len2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let s = self.l[i - 1].map2(len2.sqrt(), |l, r| l / r);
+            let moved = and(
+                and(self.w[i].gt(zero), len2.gt(zero)),
+                not((s - F4::splat(1.0)).abs().lt(F4::splat(LENGTH_DEADBAND))),
+            );
+            let next = [a[0] + d[0] * s, a[1] + d[1] * s, a[2] + d[2] * s];
+            let correction = [next[0] - b[0], next[1] - b[1], next[2] - b[2]];
+            self.corrections[i] = select3(moved, correction, [zero; 3]);
+            self.p[i] = select3(moved, next, b);
+        }
+    }
+
+    /// The corrections of the last `follow_the_leader` for lane `lane`.
+    pub fn store_corrections(&self, lane: usize, out: &mut [V3]) {
+        for (o, c) in out.iter_mut().zip(&self.corrections) {
+            *o = [c[0].0[lane], c[1].0[lane], c[2].0[lane]];
         }
     }
 

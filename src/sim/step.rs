@@ -463,7 +463,7 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         work.sweep(n - 1);
         work.collide(ctx, n);
     }
-    finish(ctx, s, work)
+    finish(ctx, s, work, false)
 }
 
 /// Four strands' steps with their constraint sweeps in SIMD lanes when
@@ -505,10 +505,17 @@ fn step_group(
             group.load_state(&lane_inputs(works, n), n);
         }
     }
+    let ftl_done = ctx.ftl.is_some();
+    if ftl_done {
+        group.follow_the_leader();
+    }
     for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
         group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+        if ftl_done {
+            group.store_corrections(lane, &mut work.corrections[..n]);
+        }
         let index = s.index;
-        if !finish(ctx, s, work) {
+        if !finish(ctx, s, work, ftl_done) {
             failed.push(index);
         }
     }
@@ -523,17 +530,20 @@ fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {
         stretch: &works[l].stretch[..m],
         rest: &works[l].rest[..m],
         bend: &works[l].bend[..m],
+        w: &works[l].w[..n],
+        l: &works[l].l[..m],
     })
 }
 
 /// After the iterations: inextensibility, final collisions, velocities,
 /// bond update (17); commits the strand if its new state is finite.
-fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+/// `ftl_done`: the inextensibility pass already ran (in lanes).
+fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
     let n = s.positions.len();
     let m = n - 1;
     let dt = ctx.dt;
     let colliding = !ctx.colliders.is_empty();
-    if ctx.ftl.is_some() {
+    if ctx.ftl.is_some() && !ftl_done {
         follow_the_leader(
             &mut work.p[..n],
             &work.w[..n],
