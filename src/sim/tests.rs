@@ -810,3 +810,35 @@ fn hair_hair_penalty_pushes_close_strands_apart() {
     assert!((untouched - 0.001).abs() < 1e-6);
     assert!(apart > 0.0015, "{apart}");
 }
+
+#[test]
+fn an_infinite_vertex_with_hair_hair_on_is_contained_without_harm() {
+    let groom = generate(&GeneratorParameters {
+        strands: 12,
+        ..Default::default()
+    })
+    .unwrap();
+    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let bad = set.strand_range(5).unwrap();
+    set.positions_mut()[bad.start + 7] = [f32::INFINITY, 0.0, f32::NEG_INFINITY];
+    let mut solver = Solver::new(SolverParameters {
+        hair_radius: 1e-3,
+        hair_hair_strength: Some(5.0),
+        ..SolverParameters::default()
+    })
+    .unwrap();
+    let report = solver
+        .step(&mut set, &head_and_pillow(), &Environment::default())
+        .unwrap();
+    assert_eq!(report.contained, vec![5]);
+    for _ in 0..10 {
+        let report = solver
+            .step(&mut set, &head_and_pillow(), &Environment::default())
+            .unwrap();
+        assert!(report.contained.is_empty());
+    }
+    for s in (0..12).filter(|s| *s != 5) {
+        let r = set.strand_range(s).unwrap();
+        assert!(set.positions()[r].iter().all(|p| math::is_finite3(*p)));
+    }
+}
