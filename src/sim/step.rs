@@ -118,6 +118,14 @@ impl Solver {
         &self.parameters
     }
 
+    /// Changes the settings from the next step on (a stage may damp more,
+    /// iterate more, switch hair-hair off...).
+    pub fn set_parameters(&mut self, parameters: SolverParameters) -> Result<(), SimError> {
+        parameters.check()?;
+        self.parameters = parameters;
+        Ok(())
+    }
+
     /// Advances every active strand by `dt`. Strands whose new state is not
     /// finite keep their old state, are frozen and reported.
     pub fn step(
