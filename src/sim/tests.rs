@@ -227,6 +227,14 @@ fn bed_hair_keeps_the_hydrogen_share_of_the_held_bend() {
     for (r, h) in rest.iter().zip(&held_darboux) {
         assert!((r / h / 0.33 - 1.0).abs() < 0.02, "joint ratio {}", r / h);
     }
+    // The exported rest shape bends by the retained angle at every joint.
+    let rest_angles = turning_angles(&set.rest_pose());
+    assert_within(
+        "bed hair: rest-pose angle / held angle",
+        mean(&rest_angles) / HELD_ANGLE,
+        0.33,
+        0.02,
+    );
     release(&mut set, 15.0);
     let angles = turning_angles(set.positions());
     // Darboux vectors are sin(angle / 2) * axis: 0.33 of a 10 degree bend
