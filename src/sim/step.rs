@@ -25,6 +25,8 @@ use rayon::prelude::*;
 #[derive(Debug)]
 pub struct Solver {
     parameters: SolverParameters,
+    /// Groups of four in SIMD lanes (off only to test the scalar path).
+    simd: bool,
     snapshot: Vec<V3>,
     grid: EdgeGrid,
 }
@@ -60,6 +62,7 @@ struct Context<'a> {
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
+    simd: bool,
 }
 
 /// Per-thread working copy of one strand.
@@ -109,6 +112,7 @@ impl Solver {
         parameters.check()?;
         Ok(Solver {
             parameters,
+            simd: true,
             snapshot: Vec::new(),
             grid: EdgeGrid::default(),
         })
@@ -116,6 +120,13 @@ impl Solver {
 
     pub fn parameters(&self) -> &SolverParameters {
         &self.parameters
+    }
+
+    /// Steps every strand alone (the scalar path), to check the SIMD path.
+    #[cfg(test)]
+    pub(crate) fn without_simd(mut self) -> Solver {
+        self.simd = false;
+        self
     }
 
     /// Changes the settings from the next step on (a stage may damp more,
@@ -218,8 +229,14 @@ impl Solver {
             hair_hair: hair_hair.map(|alpha| (alpha, &self.grid, self.snapshot.as_slice())),
             colliders: &prepared,
             root_transform: strands.root_transform,
+            simd: self.simd,
         };
-        let views = split_strands(strands, &active);
+        let mut views = split_strands(strands, &active);
+        // Strands of one vertex count next to each other so groups of four
+        // are uniform (SIMD) even in grooms of mixed lengths; the order is
+        // fixed by the data, and a strand's result does not depend on its
+        // group anyway.
+        views.sort_by_key(|v| (!v.active, v.positions.len(), v.index));
         // Strands go in groups of four (see `step_group`); a strand's
         // result does not depend on its group, so not on the thread count.
         let failed: Vec<usize> = views
@@ -232,6 +249,8 @@ impl Solver {
             )
             .flat_map_iter(|f| f.into_iter())
             .collect();
+        let mut failed = failed;
+        failed.sort_unstable();
         for &strand in &failed {
             strands.frozen[strand] = true;
         }
@@ -484,7 +503,8 @@ fn step_group(
     group: &mut Group,
 ) -> Vec<usize> {
     let n = strands.first().map_or(0, |s| s.positions.len());
-    let uniform = strands.len() == LANES
+    let uniform = ctx.simd
+        && strands.len() == LANES
         && n >= 2
         && strands.iter().all(|s| s.active && s.positions.len() == n);
     let mut failed = Vec::new();
