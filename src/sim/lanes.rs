@@ -276,12 +276,9 @@ impl Group {
         }
         for e in 0..m {
             self.l.push(F4(std::array::from_fn(|l| lanes[l].l[e])));
-            self.stretch.push(Stretch4::gather([
-                &lanes[0].stretch[e],
-                &lanes[1].stretch[e],
-                &lanes[2].stretch[e],
-                &lanes[3].stretch[e],
-            ]));
+            self.stretch.push(Stretch4::gather(std::array::from_fn(|l| {
+                &lanes[l].stretch[e]
+            })));
             self.rest.push(std::array::from_fn(|c| {
                 F4(std::array::from_fn(|l| lanes[l].rest[e][c]))
             }));
