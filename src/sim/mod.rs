@@ -55,7 +55,7 @@ mod tests;
 pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;
-pub use state::StrandSet;
+pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
 
 use serde::{Deserialize, Serialize};
