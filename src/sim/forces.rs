@@ -188,6 +188,11 @@ impl EdgeGrid {
             }
             let a = positions[e.edge as usize];
             let b = positions[e.edge as usize + 1];
+            // Most edges of a cell are farther than 2r on some axis: a box
+            // test is cheaper than the foot point.
+            if (0..3).any(|c| p[c] < a[c].min(b[c]) - reach || p[c] > a[c].max(b[c]) + reach) {
+                continue;
+            }
             let ab = sub(b, a);
             let ab2 = dot(ab, ab);
             let t = if ab2 > 0.0 {
