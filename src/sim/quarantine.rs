@@ -32,7 +32,12 @@ mod tests {
         assert!(all_finite(&p, &p, &q, &p));
         assert!(!all_finite(&[[f32::NAN, 0.0, 0.0]], &p, &q, &p));
         assert!(!all_finite(&p, &[[0.0, f32::INFINITY, 0.0]], &q, &p));
-        assert!(!all_finite(&p, &p, &[[0.0, 0.0, f32::NEG_INFINITY, 1.0]], &p));
+        assert!(!all_finite(
+            &p,
+            &p,
+            &[[0.0, 0.0, f32::NEG_INFINITY, 1.0]],
+            &p
+        ));
         assert!(!all_finite(&p, &p, &q, &[[0.0, 0.0, -f32::NAN]]));
     }
 }
