@@ -34,6 +34,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     if args.vertices < 2 || args.vertices > 10_001 {
         return Err(BadInput("--vertices must be between 2 and 10001".into()).into());
     }
+    if args.strands.saturating_mul(args.vertices) > 50_000_000 {
+        return Err(BadInput("--strands x --vertices must be at most 50,000,000".into()).into());
+    }
     if args.threads == Some(0) {
         return Err(BadInput("--threads must be at least 1".into()).into());
     }
