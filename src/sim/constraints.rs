@@ -4,11 +4,14 @@
 use super::math::{darboux, qnormalize, tangent, Quat, V3};
 
 /// Squared size of a stretch/shear violation too small to correct.
-const STRETCH_DEADBAND2: f32 = 4.0e-12;
+pub(crate) const STRETCH_DEADBAND2: f32 = 4.0e-12;
 /// Squared size of a bend/twist violation too small to correct.
-const BEND_DEADBAND2: f32 = 1.0e-14;
+pub(crate) const BEND_DEADBAND2: f32 = 1.0e-14;
+/// How far from 1 a squared quaternion length may be for the Newton
+/// renormalisation.
+pub(crate) const NEWTON_RANGE: f32 = 1.0e-3;
 /// Relative length error the inextensibility pass leaves alone.
-const LENGTH_DEADBAND: f32 = 2.0e-6;
+pub(crate) const LENGTH_DEADBAND: f32 = 2.0e-6;
 
 /// The per-step constants of one edge's stretch/shear constraint (the
 /// inverse masses do not change during a step).
@@ -140,7 +143,7 @@ pub fn bend_twist(q1: &mut Quat, q2: &mut Quat, rest: V3, ab: [f32; 2]) {
 fn renormalize(q: Quat) -> Quat {
     let n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
     let e = n2 - 1.0;
-    if e.abs() < 1.0e-3 {
+    if e.abs() < NEWTON_RANGE {
         let s = 1.0 - 0.5 * e + 0.375 * e * e;
         [q[0] * s, q[1] * s, q[2] * s, q[3] * s]
     } else {

@@ -4,7 +4,7 @@
 //! strands are advanced in parallel (gathered, never scattered), so the
 //! result does not depend on the thread count.
 
-use super::math::{cross, dot, length, scale, sub, V3};
+use super::math::{cross, dot, is_finite3, length, scale, sub, V3};
 use super::Blower;
 
 /// The blower's velocity change at a vertex, (19):
@@ -80,7 +80,9 @@ impl EdgeGrid {
             }
             for v in w[0]..w[1].saturating_sub(1) {
                 let d = sub(positions[v + 1], positions[v]);
-                cell = cell.max(d[0].abs()).max(d[1].abs()).max(d[2].abs());
+                if is_finite3(d) {
+                    cell = cell.max(d[0].abs()).max(d[1].abs()).max(d[2].abs());
+                }
             }
         }
         self.inv_cell = 1.0 / cell;
@@ -91,6 +93,9 @@ impl EdgeGrid {
             }
             for v in w[0]..w[1].saturating_sub(1) {
                 let (a, b) = (positions[v], positions[v + 1]);
+                if !(is_finite3(a) && is_finite3(b)) {
+                    continue;
+                }
                 let lo = cell_of(
                     [
                         a[0].min(b[0]) - reach,
@@ -107,6 +112,12 @@ impl EdgeGrid {
                     ],
                     self.inv_cell,
                 );
+                // An edge spans at most 3 cells per axis (cells are at least
+                // as long as any edge); far-off coordinates saturate to one
+                // cell. Never loop over more than that.
+                if (0..3).any(|c| i64::from(hi[c]) - i64::from(lo[c]) > 3) {
+                    continue;
+                }
                 for x in lo[0]..=hi[0] {
                     for y in lo[1]..=hi[1] {
                         for z in lo[2]..=hi[2] {
@@ -177,6 +188,11 @@ impl EdgeGrid {
             }
             let a = positions[e.edge as usize];
             let b = positions[e.edge as usize + 1];
+            // Most edges of a cell are farther than 2r on some axis: a box
+            // test is cheaper than the foot point.
+            if (0..3).any(|c| p[c] < a[c].min(b[c]) - reach || p[c] > a[c].max(b[c]) + reach) {
+                continue;
+            }
             let ab = sub(b, a);
             let ab2 = dot(ab, ab);
             let t = if ab2 > 0.0 {

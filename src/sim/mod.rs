@@ -15,11 +15,35 @@
 //! - Every vertex has unit mass (inverse mass 1, the root 0); the frame of
 //!   edge `e` has inverse mass `quaternion_mass_scale / l_e^2` (METHOD G),
 //!   except the root edge's frame, which is fixed to the scalp.
+//! - Per-step order (METHOD D): forces and bond-rate changes, rest shape
+//!   (15), `iterations` x (stretch/shear, bend/twist, collisions), one
+//!   Follow-The-Leader pass, final collision pass, velocities, bond update
+//!   (17). Strands run in parallel in groups of four (SIMD lanes); every
+//!   strand's arithmetic is the same in any group, so results are
+//!   bit-identical for any thread count.
+//!
+//! ```
+//! use groombake::sim::*;
+//! let groom = bench_groom(8, 12).unwrap();
+//! let mut strands = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+//! let mut solver = Solver::new(SolverParameters::default()).unwrap();
+//! let colliders = ColliderSet::new();
+//! // Wet: hydrogen bonds break at 10 per second.
+//! let wet = Environment { bond_rate_drive: [-10.0, 0.0, 0.0, 0.0], ..Environment::default() };
+//! for _ in 0..60 {
+//!     let report = solver.step(&mut strands, &colliders, &wet).unwrap();
+//!     assert!(report.contained.is_empty());
+//! }
+//! assert!(strands.bond_rates(BondKind::Hydrogen).iter().all(|b| *b == 0.0));
+//! let rest = strands.rest_pose();
+//! assert_eq!(rest.len(), strands.vertex_count());
+//! ```
 
 mod bonds;
 mod colliders;
 mod constraints;
 mod forces;
+mod lanes;
 mod math;
 mod quarantine;
 mod rest_pose;

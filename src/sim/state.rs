@@ -398,6 +398,13 @@ impl StrandSet {
         Ok(())
     }
 
+    /// Releases every kinematic target (roots follow the scalp again).
+    pub fn clear_kinematic_targets(&mut self) {
+        for control in &mut self.controls {
+            control.targeted = false;
+        }
+    }
+
     /// Roots (and root frames) follow this transform of their initial
     /// placement from the next step on.
     pub fn set_root_transform(&mut self, pose: &Pose) {

@@ -11,6 +11,7 @@ use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
 use super::forces::{blower_dv, EdgeGrid};
+use super::lanes::{Group, LaneInput, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
@@ -24,6 +25,8 @@ use rayon::prelude::*;
 #[derive(Debug)]
 pub struct Solver {
     parameters: SolverParameters,
+    /// Groups of four in SIMD lanes (off only to test the scalar path).
+    simd: bool,
     snapshot: Vec<V3>,
     grid: EdgeGrid,
 }
@@ -60,6 +63,7 @@ struct Context<'a> {
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
+    simd: bool,
 }
 
 /// Per-thread working copy of one strand.
@@ -109,6 +113,7 @@ impl Solver {
         parameters.check()?;
         Ok(Solver {
             parameters,
+            simd: true,
             snapshot: Vec::new(),
             grid: EdgeGrid::default(),
         })
@@ -116,6 +121,21 @@ impl Solver {
 
     pub fn parameters(&self) -> &SolverParameters {
         &self.parameters
+    }
+
+    /// Steps every strand alone (the scalar path), to check the SIMD path.
+    #[cfg(test)]
+    pub(crate) fn without_simd(mut self) -> Solver {
+        self.simd = false;
+        self
+    }
+
+    /// Changes the settings from the next step on (a stage may damp more,
+    /// iterate more, switch hair-hair off...).
+    pub fn set_parameters(&mut self, parameters: SolverParameters) -> Result<(), SimError> {
+        parameters.check()?;
+        self.parameters = parameters;
+        Ok(())
     }
 
     /// Advances every active strand by `dt`. Strands whose new state is not
@@ -216,39 +236,28 @@ impl Solver {
             hair_hair: hair_hair.map(|alpha| (alpha, &self.grid, self.snapshot.as_slice())),
             colliders: &prepared,
             root_transform: strands.root_transform,
+            simd: self.simd,
         };
-        let views = split_strands(strands, &active);
-        // Strands go in pairs (see `step_pair`); the pairing is fixed by
-        // strand order, so results do not depend on the thread count.
+        let mut views = split_strands(strands, &active);
+        // Strands of one vertex count next to each other so groups of four
+        // are uniform (SIMD) even in grooms of mixed lengths; the order is
+        // fixed by the data, and a strand's result does not depend on its
+        // group anyway.
+        views.sort_by_key(|v| (!v.active, v.positions.len(), v.index));
+        // Strands go in groups of four (see `step_group`); a strand's
+        // result does not depend on its group, so not on the thread count.
         let failed: Vec<usize> = views
             .into_par_iter()
-            .chunks(2)
-            .with_min_len(8)
+            .chunks(LANES)
+            .with_min_len(4)
             .map_init(
-                || (Work::default(), Work::default()),
-                |(wa, wb), mut pair| {
-                    let second = pair.pop();
-                    let first = pair.pop();
-                    let mut failed = [None, None];
-                    match (first, second) {
-                        (Some(a), Some(b)) => {
-                            let (ia, ib) = (a.index, b.index);
-                            let (ok_a, ok_b) = step_pair(&context, a, b, wa, wb);
-                            failed = [(!ok_a).then_some(ia), (!ok_b).then_some(ib)];
-                        }
-                        (None, Some(a)) | (Some(a), None) => {
-                            let index = a.index;
-                            if a.active && !step_strand(&context, a, wa) {
-                                failed[0] = Some(index);
-                            }
-                        }
-                        (None, None) => {}
-                    }
-                    failed
-                },
+                || (std::array::from_fn(|_| Work::default()), Group::default()),
+                |(works, group), strands| step_group(&context, strands, works, group),
             )
-            .flat_map_iter(|f| f.into_iter().flatten())
+            .flat_map_iter(|f| f.into_iter())
             .collect();
+        let mut failed = failed;
+        failed.sort_unstable();
         for &strand in &failed {
             strands.frozen[strand] = true;
         }
@@ -480,27 +489,6 @@ impl Work {
     }
 }
 
-/// Two strands' sweeps in lockstep: each strand's arithmetic is exactly
-/// that of `Work::sweep`, but the two independent dependency chains
-/// overlap in the processor.
-fn sweep_pair(a: &mut Work, ma: usize, b: &mut Work, mb: usize) {
-    let mut sa = a.sweep_begin();
-    let mut sb = b.sweep_begin();
-    let common = ma.min(mb);
-    for e in 1..common {
-        a.sweep_edge(e, &mut sa);
-        b.sweep_edge(e, &mut sb);
-    }
-    for e in common.max(1)..ma {
-        a.sweep_edge(e, &mut sa);
-    }
-    for e in common.max(1)..mb {
-        b.sweep_edge(e, &mut sb);
-    }
-    a.sweep_end(ma, sa);
-    b.sweep_end(mb, sb);
-}
-
 /// One strand's step. Returns false (and commits nothing) when its new
 /// state is not finite.
 fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
@@ -514,42 +502,88 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         work.sweep(n - 1);
         work.collide(ctx, n);
     }
-    finish(ctx, s, work)
+    finish(ctx, s, work, false)
 }
 
-/// Two strands' steps, their constraint sweeps interleaved; bit-identical
-/// to `step_strand` on each.
-fn step_pair(
+/// Four strands' steps with their constraint sweeps in SIMD lanes when
+/// they are all active and of one vertex count (bit-identical to
+/// `step_strand` on each); otherwise one by one. Returns the failed ones.
+fn step_group(
     ctx: &Context<'_>,
-    a: StrandMut<'_>,
-    b: StrandMut<'_>,
-    wa: &mut Work,
-    wb: &mut Work,
-) -> (bool, bool) {
-    let (na, nb) = (a.positions.len(), b.positions.len());
-    if na < 2 || nb < 2 || !a.active || !b.active {
-        let ok_a = !a.active || step_strand(ctx, a, wa);
-        let ok_b = !b.active || step_strand(ctx, b, wb);
-        return (ok_a, ok_b);
+    strands: Vec<StrandMut<'_>>,
+    works: &mut [Work; LANES],
+    group: &mut Group,
+) -> Vec<usize> {
+    let n = strands.first().map_or(0, |s| s.positions.len());
+    let uniform = ctx.simd
+        && strands.len() == LANES
+        && n >= 2
+        && strands.iter().all(|s| s.active && s.positions.len() == n);
+    let mut failed = Vec::new();
+    if !uniform {
+        for (s, work) in strands.into_iter().zip(works.iter_mut()) {
+            let index = s.index;
+            if s.active && !step_strand(ctx, s, work) {
+                failed.push(index);
+            }
+        }
+        return failed;
     }
-    prepare(ctx, &a, wa);
-    prepare(ctx, &b, wb);
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        prepare(ctx, s, work);
+    }
+    let m = n - 1;
+    group.load_constants(lane_inputs(works, n), n);
+    let colliding = !ctx.colliders.is_empty();
     for _ in 0..ctx.iterations {
-        sweep_pair(wa, na - 1, wb, nb - 1);
-        wa.collide(ctx, na);
-        wb.collide(ctx, nb);
+        group.sweep();
+        if colliding {
+            for (lane, work) in works.iter_mut().enumerate() {
+                group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+                work.collide(ctx, n);
+            }
+            group.load_state(&lane_inputs(works, n), n);
+        }
     }
-    (finish(ctx, a, wa), finish(ctx, b, wb))
+    let ftl_done = ctx.ftl.is_some();
+    if ftl_done {
+        group.follow_the_leader();
+    }
+    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+        group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+        if ftl_done {
+            group.store_corrections(lane, &mut work.corrections[..n]);
+        }
+        let index = s.index;
+        if !finish(ctx, s, work, ftl_done) {
+            failed.push(index);
+        }
+    }
+    failed
+}
+
+fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {
+    let m = n - 1;
+    std::array::from_fn(|l| LaneInput {
+        p: &works[l].p[..n],
+        q: &works[l].q[..m],
+        stretch: &works[l].stretch[..m],
+        rest: &works[l].rest[..m],
+        bend: &works[l].bend[..m],
+        w: &works[l].w[..n],
+        l: &works[l].l[..m],
+    })
 }
 
 /// After the iterations: inextensibility, final collisions, velocities,
 /// bond update (17); commits the strand if its new state is finite.
-fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+/// `ftl_done`: the inextensibility pass already ran (in lanes).
+fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
     let n = s.positions.len();
     let m = n - 1;
     let dt = ctx.dt;
     let colliding = !ctx.colliders.is_empty();
-    if ctx.ftl.is_some() {
+    if ctx.ftl.is_some() && !ftl_done {
         follow_the_leader(
             &mut work.p[..n],
             &work.w[..n],

@@ -227,6 +227,14 @@ fn bed_hair_keeps_the_hydrogen_share_of_the_held_bend() {
     for (r, h) in rest.iter().zip(&held_darboux) {
         assert!((r / h / 0.33 - 1.0).abs() < 0.02, "joint ratio {}", r / h);
     }
+    // The exported rest shape bends by the retained angle at every joint.
+    let rest_angles = turning_angles(&set.rest_pose());
+    assert_within(
+        "bed hair: rest-pose angle / held angle",
+        mean(&rest_angles) / HELD_ANGLE,
+        0.33,
+        0.02,
+    );
     release(&mut set, 15.0);
     let angles = turning_angles(set.positions());
     // Darboux vectors are sin(angle / 2) * axis: 0.33 of a 10 degree bend
@@ -699,4 +707,169 @@ fn bad_input_is_refused_with_a_reason() {
         .step(&mut set, &ColliderSet::new(), &Environment::default())
         .unwrap();
     assert_eq!(set.positions()[0], [0.0, 0.0, 0.0]);
+}
+
+#[test]
+fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
+    // Mixed lengths (13 strands of 25, 24 and 23 vertices: sorted into three
+    // uniform groups and one single) plus every force.
+    let mut strands = Vec::new();
+    for (i, strand) in generate(&GeneratorParameters {
+        strands: 13,
+        shape: StrandShape::Wavy,
+        ..Default::default()
+    })
+    .unwrap()
+    .strands()
+    .enumerate()
+    {
+        strands.push(strand[..strand.len() - i % 3].to_vec());
+    }
+    let groom = metres(Groom::from_strands(&strands));
+    let mut grouped_set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let mut alone_set = grouped_set.clone();
+    let parameters = SolverParameters {
+        hair_radius: 1e-3,
+        hair_hair_strength: Some(3.0),
+        ..SolverParameters::default()
+    };
+    let mut grouped = Solver::new(parameters).unwrap();
+    let mut alone = Solver::new(parameters).unwrap().without_simd();
+    let colliders = head_and_pillow();
+    let env = Environment {
+        blower: Some(Blower {
+            from: [0.3, 0.2, 0.0],
+            to: [0.0, 0.0, 0.0],
+            strength: 6.0,
+            hydrogen_rate: 0.003,
+        }),
+        bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
+        ..Environment::default()
+    };
+    for _ in 0..80 {
+        grouped.step(&mut grouped_set, &colliders, &env).unwrap();
+        alone.step(&mut alone_set, &colliders, &env).unwrap();
+    }
+    assert!(grouped_set.positions() == alone_set.positions());
+    assert!(grouped_set.edge_rotations() == alone_set.edge_rotations());
+    for kind in BondKind::ALL {
+        assert!(grouped_set.bond_memories(kind) == alone_set.bond_memories(kind));
+    }
+    // They did move.
+    assert!(grouped_set.positions() != groom.points.as_slice());
+}
+
+#[test]
+fn a_blower_dries_hydrogen_bonds_where_it_blows() {
+    // (21): db_hyd = 0.003 |dv_w| per step while b_hyd < 1.
+    let mut set =
+        StrandSet::from_groom(&groom_of(arc_points(24, 0.0)), &Material::default()).unwrap();
+    set.set_all_bond_rates(BondKind::Hydrogen, 0.0);
+    let mut solver = Solver::new(SolverParameters::default()).unwrap();
+    let blower = Blower {
+        from: [0.1, 0.0, -0.5],
+        to: [0.1, 0.0, 0.0],
+        strength: 40.0,
+        hydrogen_rate: 0.003,
+    };
+    let env = Environment {
+        gravity: Gravity::Off,
+        blower: Some(blower),
+        ..Environment::default()
+    };
+    let colliders = ColliderSet::new();
+    let before = set.positions().to_vec();
+    solver.step(&mut set, &colliders, &env).unwrap();
+    let rates = set.bond_rates(BondKind::Hydrogen);
+    // The wind is along +z, across the strand (along +x): sin(theta) = 1,
+    // d = |x - 0.1| off the axis.
+    for (j, rate) in rates.iter().enumerate().take(24).skip(1) {
+        let d = (before[j][0] - 0.1f32).abs();
+        let dv = 40.0 / ((d + 1.0) * (d + 1.0)) / 360.0;
+        assert!(
+            (rate - 0.003 * dv).abs() < 1e-7,
+            "joint {j}: {rate} vs {}",
+            0.003 * dv
+        );
+    }
+    // And it pushes the hair downwind.
+    assert!(set.positions()[24][2] > 0.0);
+}
+
+#[test]
+fn hair_hair_penalty_pushes_close_strands_apart() {
+    // Two parallel strands 1 mm apart with a 1 mm hair radius (contact
+    // below 2 mm): they separate; without the penalty they do not.
+    let a = arc_points(10, 0.0);
+    let b: Vec<V3> = a.iter().map(|p| [p[0], p[1], p[2] + 0.001]).collect();
+    let groom = metres(Groom::from_strands([a, b]));
+    let gap = |strength: Option<f32>| {
+        let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+        let mut solver = Solver::new(SolverParameters {
+            hair_radius: 1e-3,
+            hair_hair_strength: strength,
+            ..SolverParameters::default()
+        })
+        .unwrap();
+        run(&mut solver, &mut set, &quiet(), 0.2);
+        set.positions()[21][2] - set.positions()[10][2]
+    };
+    let apart = gap(Some(5.0));
+    let untouched = gap(None);
+    eprintln!("tip gap with penalty {apart}, without {untouched}");
+    assert!((untouched - 0.001).abs() < 1e-6);
+    assert!(apart > 0.0015, "{apart}");
+}
+
+#[test]
+fn an_infinite_vertex_with_hair_hair_on_is_contained_without_harm() {
+    let groom = generate(&GeneratorParameters {
+        strands: 12,
+        ..Default::default()
+    })
+    .unwrap();
+    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let bad = set.strand_range(5).unwrap();
+    set.positions_mut()[bad.start + 7] = [f32::INFINITY, 0.0, f32::NEG_INFINITY];
+    let mut solver = Solver::new(SolverParameters {
+        hair_radius: 1e-3,
+        hair_hair_strength: Some(5.0),
+        ..SolverParameters::default()
+    })
+    .unwrap();
+    let report = solver
+        .step(&mut set, &head_and_pillow(), &Environment::default())
+        .unwrap();
+    assert_eq!(report.contained, vec![5]);
+    for _ in 0..10 {
+        let report = solver
+            .step(&mut set, &head_and_pillow(), &Environment::default())
+            .unwrap();
+        assert!(report.contained.is_empty());
+    }
+    for s in (0..12).filter(|s| *s != 5) {
+        let r = set.strand_range(s).unwrap();
+        assert!(set.positions()[r].iter().all(|p| math::is_finite3(*p)));
+    }
+}
+
+#[test]
+fn heavier_frames_make_a_stiffer_strand_under_gravity() {
+    // METHOD G: a 24 cm horizontal strand of 12 edges droops far more with
+    // w_q = w_p / l^2 (scale 1) than with heavier frames.
+    let droop = |scale: f32| {
+        let points: Vec<V3> = (0..=12).map(|i| [0.02 * i as f32, 0.0, 0.0]).collect();
+        let mut set = StrandSet::from_groom(&groom_of(points), &Material::default()).unwrap();
+        let mut solver = Solver::new(SolverParameters {
+            quaternion_mass_scale: scale,
+            ..SolverParameters::default()
+        })
+        .unwrap();
+        run(&mut solver, &mut set, &Environment::default(), 10.0);
+        -set.positions()[12][1]
+    };
+    let soft = droop(1.0);
+    let stiff = droop(0.1);
+    eprintln!("tip droop after 10 s: scale 1 -> {soft} m, scale 0.1 -> {stiff} m");
+    assert!(soft > stiff && stiff > 0.0 && soft < 0.24, "{soft} {stiff}");
 }

@@ -38,4 +38,8 @@ fn bench_refuses_bad_sizes() {
     dir.run_fail(&["bench", "--vertices", "1"], 2);
     dir.run_fail(&["bench", "--strands", "0", "--vertices", "8"], 2);
     dir.run_fail(&["bench", "--threads", "0"], 2);
+    dir.run_fail(
+        &["bench", "--strands", "10000000", "--vertices", "10000"],
+        2,
+    );
 }
