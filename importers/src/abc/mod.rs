@@ -224,6 +224,45 @@ mod tests {
         assert_eq!(groom.frames.len(), 5);
     }
 
+    /// Curves whose vertex counts change between samples cannot be one
+    /// groom: refused by property path. The check walks the stored samples,
+    /// not the (unchecked) sample count of the header.
+    #[test]
+    fn changing_topology_is_refused() {
+        use exporters::abc::archive::{ArchiveWriter, Pod, PropertyKind, PropertyWriter};
+        let mut archive = ArchiveWriter::new(std::io::Cursor::new(Vec::new())).unwrap();
+        let mut p = PropertyWriter::new("P", String::new(), PropertyKind::Array, Pod::F32, 3, 0);
+        p.set_sample(&mut archive, &[0u8; 24]).unwrap();
+        let mut n = PropertyWriter::new(
+            "nVertices",
+            String::new(),
+            PropertyKind::Array,
+            Pod::I32,
+            1,
+            0,
+        );
+        n.set_sample(&mut archive, &2i32.to_le_bytes()).unwrap();
+        for _ in 0..1000 {
+            n.repeat_previous();
+        }
+        n.set_sample(&mut archive, &[1, 0, 0, 0, 1, 0, 0, 0])
+            .unwrap();
+        let closed = vec![
+            p.close(&mut archive).unwrap(),
+            n.close(&mut archive).unwrap(),
+        ];
+        let geom = archive.close_compound(".geom", "", closed).unwrap();
+        let curves = archive
+            .close_object("hair", "schema=AbcGeom_Curve_v2", vec![geom], Vec::new())
+            .unwrap();
+        let bytes = archive.finish("", vec![curves]).unwrap().into_inner();
+        let text = assert_clean_error(Path::new("topo.abc"), &bytes);
+        assert!(
+            text.contains("topo.abc:/hair/.geom/nVertices: the curve topology changes"),
+            "{text}"
+        );
+    }
+
     /// Regression: an object group listed as its own descendant would make
     /// the tree walk endless; the reader refuses a group it has seen.
     #[test]
