@@ -345,6 +345,16 @@ mod tests {
     }
 
     #[test]
+    fn empty_groom_round_trips() {
+        let dir = TempDir::new("empty");
+        let path = dir.0.join("empty.abc");
+        exporters::write(&path, &Groom::default()).unwrap();
+        let back = read(&path).unwrap();
+        assert_eq!(back.strand_count(), 0);
+        assert_eq!(back.vertex_count(), 0);
+    }
+
+    #[test]
     fn export_converts_to_centimetres_y_up() {
         let dir = TempDir::new("units");
         let mut groom = sample_groom();
