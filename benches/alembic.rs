@@ -6,7 +6,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use groom::{Attribute, AttributeValues, Frame, Groom};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 const STRANDS: usize = 5_000;
 const POINTS: usize = 40;
@@ -53,7 +53,7 @@ fn scratch(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-fn write_animated(path: &Path, groom: &Groom, frames: &[Frame]) {
+fn write_animated(path: &std::path::Path, groom: &Groom, frames: &[Frame]) {
     let options = exporters::AnimationOptions {
         fps: 24.0,
         frame_count: frames.len(),

@@ -213,9 +213,8 @@ pub fn generate(parameters: &GeneratorParameters) -> Result<Groom, GeneratorErro
         units: Units::METERS,
         up_axis: UpAxis::Y,
         provenance: Provenance {
-            source: None,
             format: "generated".into(),
-            info: String::new(),
+            ..Default::default()
         },
         ..Groom::default()
     };

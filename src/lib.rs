@@ -3,5 +3,6 @@
 //! these.
 
 pub mod generate;
+pub mod sim;
 pub mod stochastic_wind;
 pub mod timeline;

@@ -9,7 +9,11 @@
 //! of consecutive strand points; a one-point strand is a segment from its
 //! point to itself), in metres and Y up as glTF requires.
 //! Vertex attributes are `_NAME` accessors (upper-case name; per-strand
-//! attributes are repeated on their strand's vertices). Animation is one
+//! attributes are repeated on their strand's vertices). Each attribute
+//! accessor's `extras.groombake` keeps what glTF cannot say: the attribute's
+//! own name (case and all), its scope (`vertex` or `strand`), and for
+//! integers stored as floats or split into two u16, `"type": "int"` and the
+//! encoding. Animation is one
 //! morph target per frame (POSITION deltas from the rest pose) and a STEP
 //! sampler of the mesh weights that switches target k fully on at frame k's
 //! time.
@@ -36,6 +40,10 @@ const LINES: u32 = 1;
 /// Stands for the base64 payload in the `.gltf` JSON until it is streamed.
 const URI_PLACEHOLDER: &str = "@groombake-buffer@";
 const DATA_URI_PREFIX: &str = "data:application/octet-stream;base64,";
+/// The key of the attribute accessors' extras (read by the importer).
+const EXTRAS_KEY: &str = "groombake";
+/// The extras' encoding of 32-bit integers as VEC2 of UNSIGNED_SHORT.
+const INT_AS_U16X2: &str = "i32_as_u16x2";
 
 /// A vertex attribute laid out for the buffer.
 struct EncodedAttribute {
@@ -45,6 +53,8 @@ struct EncodedAttribute {
     /// Element stride; vertex attributes must be 4-byte aligned.
     stride: usize,
     bytes: Vec<u8>,
+    /// `{"groombake": {"name", "scope", ["type", "encoding"]}}`.
+    extras: Value,
 }
 
 pub struct GltfWriter {
@@ -139,11 +149,40 @@ fn start(path: &Path, groom: &Groom) -> Result<GltfWriter, ExportError> {
     })
 }
 
+/// The `_NAME` semantic of an attribute: upper case, characters other than
+/// ASCII letters, digits and `_` as `_`, and a `_2`, `_3`, ... suffix where
+/// two names would otherwise meet (`width` and `Width`). The name itself
+/// goes to the accessor's extras.
+fn semantic_for(name: &str, taken: &mut std::collections::BTreeSet<String>) -> String {
+    let base: String = std::iter::once('_')
+        .chain(name.chars().map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_uppercase()
+            } else {
+                '_'
+            }
+        }))
+        .collect();
+    let mut semantic = base.clone();
+    let mut suffix = 1;
+    while !taken.insert(semantic.clone()) {
+        suffix += 1;
+        semantic = format!("{base}_{suffix}");
+    }
+    semantic
+}
+
+/// The largest magnitude up to which every integer is an f32.
+const EXACT_FLOAT_INTEGER: i32 = 1 << 24;
+
 fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
     let mut encoded = Vec::new();
+    let mut taken = std::collections::BTreeSet::new();
     let counts = &groom.strand_vertex_counts;
     for attribute in &groom.attributes {
-        // Per-strand values are repeated on every vertex of their strand.
+        // Per-strand values are repeated on every vertex of their strand,
+        // so that other tools see them; the extras mark the scope so that
+        // the importer makes them per strand again.
         let per_vertex = |components: &[f32], width: usize| -> Vec<f32> {
             match attribute.scope {
                 Scope::Vertex => components.to_vec(),
@@ -155,8 +194,15 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                     .collect(),
             }
         };
-        let semantic = format!("_{}", attribute.name.to_uppercase());
-        let floats = |accessor_type, width| {
+        let semantic = semantic_for(&attribute.name, &mut taken);
+        let mut marker = json!({
+            "name": attribute.name,
+            "scope": match attribute.scope {
+                Scope::Vertex => "vertex",
+                Scope::Strand => "strand",
+            },
+        });
+        let floats = |accessor_type, width, marker: Value| {
             let values = per_vertex(&attribute.values.to_f32_flat(), width);
             EncodedAttribute {
                 semantic: semantic.clone(),
@@ -164,12 +210,13 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                 accessor_type,
                 stride: 4 * width,
                 bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                extras: json!({ EXTRAS_KEY: marker }),
             }
         };
         encoded.push(match &attribute.values {
-            AttributeValues::Float(_) => floats("SCALAR", 1),
-            AttributeValues::Vec2(_) => floats("VEC2", 2),
-            AttributeValues::Vec3(_) => floats("VEC3", 3),
+            AttributeValues::Float(_) => floats("SCALAR", 1, marker),
+            AttributeValues::Vec2(_) => floats("VEC2", 2, marker),
+            AttributeValues::Vec3(_) => floats("VEC3", 3, marker),
             AttributeValues::Int(values) => {
                 let values: Vec<i32> = match attribute.scope {
                     Scope::Vertex => values.clone(),
@@ -180,9 +227,14 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                         .collect(),
                 };
                 // glTF has no 32-bit signed components: 16-bit when the
-                // values fit (padded to 4-byte elements), float otherwise.
+                // values fit (padded to 4-byte elements), float when every
+                // value is exact as a float, otherwise the 32 bits as two
+                // u16 (VEC2, low half first), marked in the extras.
                 let fits_short = values.iter().all(|&v| i16::try_from(v).is_ok());
                 let fits_ushort = values.iter().all(|&v| u16::try_from(v).is_ok());
+                let fits_float = values
+                    .iter()
+                    .all(|&v| v.unsigned_abs() <= EXACT_FLOAT_INTEGER as u32);
                 if fits_short || fits_ushort {
                     let mut bytes = Vec::with_capacity(4 * values.len());
                     for &v in &values {
@@ -200,9 +252,22 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                         accessor_type: "SCALAR",
                         stride: 4,
                         bytes,
+                        extras: json!({ EXTRAS_KEY: marker }),
                     }
+                } else if fits_float {
+                    marker["type"] = json!("int");
+                    floats("SCALAR", 1, marker)
                 } else {
-                    floats("SCALAR", 1)
+                    marker["type"] = json!("int");
+                    marker["encoding"] = json!(INT_AS_U16X2);
+                    EncodedAttribute {
+                        semantic,
+                        component_type: UNSIGNED_SHORT,
+                        accessor_type: "VEC2",
+                        stride: 4,
+                        bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                        extras: json!({ EXTRAS_KEY: marker }),
+                    }
                 }
             }
         });
@@ -334,7 +399,7 @@ impl GltfWriter {
             let v = view(Some(ARRAY_BUFFER), stride);
             accessors.push(json!({
                 "bufferView": v, "componentType": attribute.component_type, "count": vertices,
-                "type": attribute.accessor_type,
+                "type": attribute.accessor_type, "extras": attribute.extras,
             }));
             attributes.insert(attribute.semantic.clone(), json!(accessors.len() - 1));
         }

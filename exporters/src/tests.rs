@@ -340,37 +340,114 @@ fn static_formats_refuse_animation() {
 #[test]
 fn hair_refuses_strands_it_cannot_hold() {
     let dir = Scratch::new();
-    let groom = Groom::from_strands([vec![[0.0f32, 0.0, 0.0]; 70_000]]);
-    let error = write(&dir.path("long.hair"), &groom).unwrap_err();
+    // Strands of one length fit the header's u32 default segment count...
+    let long = Groom::from_strands(vec![vec![[0.0f32, 0.0, 0.0]; 70_000]; 2]);
+    write(&dir.path("long.hair"), &long).unwrap();
+    let back = importers::read(&dir.path("long.hair")).unwrap();
+    assert_eq!(back.strand_vertex_counts, vec![70_000; 2]);
+    // ...but the segments array holds at most 65536 points per strand.
+    let mut mixed = long.clone();
+    mixed.strand_vertex_counts = vec![70_000, 69_999, 1];
+    let error = write(&dir.path("mixed.hair"), &mixed).unwrap_err();
     assert!(matches!(error, ExportError::Invalid { .. }), "{error}");
-    assert!(dir.files().is_empty());
+    assert!(
+        error.to_string().contains("strand 0 has 70000 points"),
+        "{error}"
+    );
+    assert_eq!(dir.files(), vec!["long.hair".to_string()]);
 }
 
 #[test]
-fn int_and_vec2_attributes_in_gltf() {
+fn attribute_types_scopes_and_names_survive_gltf() {
     let dir = Scratch::new();
     let mut groom = sample_groom();
     let n = groom.vertex_count();
-    groom.set_attribute(Attribute::new(
-        "group",
-        AttributeValues::Int((0..n as i32).map(|i| i - 3).collect()),
-    ));
+    let attributes = [
+        Attribute::new(
+            "group",
+            AttributeValues::Int((0..n as i32).map(|i| i - 3).collect()),
+        ),
+        Attribute::per_strand(
+            "root_uv",
+            AttributeValues::Vec2(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]),
+        ),
+        // Beyond 16 bits but exact as floats; beyond 2^24: split in two u16.
+        Attribute::per_strand(
+            "Clump ID",
+            AttributeValues::Int(vec![70_000, -1, 16_777_216]),
+        ),
+        Attribute::new(
+            "seed",
+            AttributeValues::Int((0..n as i32).map(|i| i32::MIN + i * 99_999_999).collect()),
+        ),
+        // Names that only case tells apart.
+        Attribute::per_strand("Width", AttributeValues::Float(vec![1.0, 2.0, 3.0])),
+        Attribute::per_strand(
+            "tint",
+            AttributeValues::Vec3(vec![[0.5; 3], [0.25; 3], [1.0; 3]]),
+        ),
+    ];
+    for attribute in attributes {
+        groom.set_attribute(attribute);
+    }
+    // Metres: width-like attributes are not rescaled on the way.
+    groom.units = Units::METERS;
+    for ext in ["glb", "gltf"] {
+        let path = dir.path(&format!("attrs.{ext}"));
+        write(&path, &groom).unwrap();
+        let back = importers::read(&path).unwrap();
+        let mut expected = groom.attributes.clone();
+        let mut got = back.attributes.clone();
+        expected.sort_by(|a, b| a.name.cmp(&b.name));
+        got.sort_by(|a, b| a.name.cmp(&b.name));
+        assert_eq!(got, expected, "{ext}");
+    }
+}
+
+#[test]
+fn per_strand_values_that_differ_along_a_strand_stay_per_vertex() {
+    let dir = Scratch::new();
+    let mut groom = sample_groom();
+    groom.units = Units::METERS;
     groom.set_attribute(Attribute::per_strand(
-        "root_uv",
-        AttributeValues::Vec2(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]),
+        "level",
+        AttributeValues::Float(vec![1.0, 2.0, 3.0]),
     ));
-    let path = dir.path("attrs.glb");
+    let path = dir.path("edited.gltf");
     write(&path, &groom).unwrap();
-    let back = importers::read(&path).unwrap();
+    // Another tool edits one vertex's value but keeps the extras: 2.0 is the
+    // second strand's value on its 5 vertices, and is written nowhere else.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut document: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let accessor = document["meshes"][0]["primitives"][0]["attributes"]["_LEVEL"]
+        .as_u64()
+        .unwrap() as usize;
     assert_eq!(
-        back.attribute("group").unwrap().values,
-        AttributeValues::Int((0..n as i32).map(|i| i - 3).collect())
+        document["accessors"][accessor]["extras"]["groombake"]["scope"],
+        "strand"
     );
-    let AttributeValues::Vec2(uv) = &back.attribute("root_uv").unwrap().values else {
-        panic!("root_uv is not vec2");
-    };
-    assert_eq!(uv.len(), n);
-    assert_eq!(uv[2], [0.3, 0.4]);
+    let view = document["accessors"][accessor]["bufferView"]
+        .as_u64()
+        .unwrap() as usize;
+    let offset = document["bufferViews"][view]["byteOffset"]
+        .as_u64()
+        .unwrap() as usize;
+    let uri = document["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let (prefix, payload) = uri.split_once(";base64,").unwrap();
+    use base64::Engine;
+    let engine = base64::engine::general_purpose::STANDARD;
+    let mut bytes = engine.decode(payload).unwrap();
+    // Vertex 3 is the second strand's second point.
+    bytes[offset + 12..offset + 16].copy_from_slice(&9.0f32.to_le_bytes());
+    document["buffers"][0]["uri"] = format!("{prefix};base64,{}", engine.encode(&bytes)).into();
+    std::fs::write(&path, document.to_string()).unwrap();
+    let back = importers::read(&path).unwrap();
+    let level = back.attribute("level").unwrap();
+    assert_eq!(level.scope, groom::Scope::Vertex);
+    assert_eq!(
+        level.values,
+        AttributeValues::Float(vec![1.0, 1.0, 2.0, 9.0, 2.0, 2.0, 2.0, 3.0, 3.0, 3.0])
+    );
 }
 
 #[test]

@@ -54,6 +54,11 @@ pub struct Provenance {
     pub format: String,
     /// Free text a format carries (the `.hair` info field, an Alembic application name).
     pub info: String,
+    /// Facts about the source file a reader keeps so that its writer can
+    /// reproduce the file exactly (header fields the groom has no place
+    /// for), keyed `<format>.<field>`. A writer honours them only while the
+    /// groom still matches what they describe.
+    pub metadata: std::collections::BTreeMap<String, String>,
 }
 
 /// One time sample of every point of the groom (same topology as the groom).

@@ -2,15 +2,21 @@
 //! `gltf` crate, which parses and validates the JSON. Strands are read from
 //! `LINE_STRIP` primitives (one strand each) and `LINES` primitives
 //! (consecutive segments that share an end vertex join into one strand);
-//! other primitives (a head mesh, points) are skipped. The scene graph's
+//! other primitives (a head mesh, points) are skipped by [`read`];
+//! [`read_triangles`] reads the triangle primitives instead, for colliders. The scene graph's
 //! transforms are applied. Morph-target animation becomes frames: frame k is
 //! the base pose plus the targets weighted by the k-th keyframe of the
 //! `weights` sampler. `_NAME` vertex attributes come back as attributes named
-//! `name` (lower case). glTF is metres and Y up.
+//! `name` (lower case), unless the accessor's `extras.groombake` (written by
+//! groombake's exporter) gives the name, says the attribute is per strand
+//! (taken from each strand's first vertex, if every strand's values agree),
+//! or says float or split-u16 values are 32-bit integers. glTF is metres and
+//! Y up.
 //!
 //! Accessors are read by this module, not the crate's reader, so that every
 //! range is checked against the buffer before it is read.
 
+use crate::mesh::Triangles;
 use crate::{ImportError, Place};
 use base64::Engine;
 use gltf::accessor::{DataType, Dimensions};
@@ -18,7 +24,7 @@ use gltf::animation::{Interpolation, Property};
 use gltf::mesh::Mode;
 use gltf::Semantic;
 use groom::{Attribute, AttributeValues, Frame, Groom, Units, UpAxis};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
@@ -27,6 +33,13 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 }
 
 type Matrix = [[f32; 4]; 4];
+
+const IDENTITY: Matrix = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
 
 /// The most points all frames together may have (3 GiB of coordinates).
 const MAX_FRAME_POINTS: u64 = 1 << 28;
@@ -43,6 +56,8 @@ struct Piece {
     positions: Vec<[f32; 3]>,
     world: Matrix,
     attributes: BTreeMap<String, AttributeValues>,
+    /// Attributes marked per strand whose values agree along every strand.
+    per_strand: BTreeSet<String>,
     /// Position deltas of each morph target.
     targets: Vec<Vec<[f32; 3]>>,
     default_weights: Vec<f32>,
@@ -50,6 +65,145 @@ struct Piece {
 }
 
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
+    let (document, reader) = load(path, bytes)?;
+    let mut pieces = Vec::new();
+    walk_scene(path, &document, |node, world| {
+        if let Some(mesh) = node.mesh() {
+            for primitive in mesh.primitives() {
+                if let Some(piece) = reader.primitive(&primitive, &mesh, world, node.index())? {
+                    pieces.push(piece);
+                }
+            }
+        }
+        Ok(())
+    })?;
+
+    let mut groom = Groom {
+        units: Units::METERS,
+        up_axis: UpAxis::Y,
+        ..Groom::default()
+    };
+    // Attributes every line primitive has, with the same type.
+    let mut common: Option<BTreeMap<String, AttributeValues>> = None;
+    for piece in &pieces {
+        let names: BTreeMap<String, AttributeValues> = piece
+            .attributes
+            .iter()
+            .map(|(name, values)| (name.clone(), empty_like(values)))
+            .collect();
+        common = Some(match common {
+            None => names,
+            Some(so_far) => so_far
+                .into_iter()
+                .filter(|(name, values)| names.get(name).is_some_and(|v| same_type(v, values)))
+                .collect(),
+        });
+    }
+    let mut attributes = common.unwrap_or_default();
+    let per_strand: BTreeSet<String> = attributes
+        .keys()
+        .filter(|name| pieces.iter().all(|p| p.per_strand.contains(*name)))
+        .cloned()
+        .collect();
+    for piece in &pieces {
+        for strand in &piece.strands {
+            groom.strand_vertex_counts.push(strand.len() as u32);
+            for &i in strand {
+                let p = piece.positions.get(i).copied().unwrap_or_default();
+                groom.points.push(transform(&piece.world, p));
+            }
+            for (name, values) in attributes.iter_mut() {
+                if let Some(source) = piece.attributes.get(name) {
+                    let selected = if per_strand.contains(name) {
+                        &strand[..strand.len().min(1)]
+                    } else {
+                        strand
+                    };
+                    append_selected(values, source, selected);
+                }
+            }
+        }
+    }
+    for (name, values) in attributes {
+        groom.attributes.push(if per_strand.contains(&name) {
+            Attribute::per_strand(name, values)
+        } else {
+            Attribute::new(name, values)
+        });
+    }
+    groom.frames = reader.frames(&document, &pieces)?;
+    groom.provenance.format = "gltf".into();
+    Ok(groom)
+}
+
+/// Reads the triangles of every TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN
+/// primitive of the scene's meshes, in world coordinates (node transforms
+/// applied; a node that mirrors gets its triangles' winding reversed, as the
+/// glTF specification asks, so they keep facing outwards). Line and point
+/// primitives, morph targets and skins are ignored: a collider is rigid.
+pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    parse_triangles(path, &bytes)
+}
+
+/// The most vertices, and the most triangles, a collider mesh may have once
+/// instanced meshes are expanded (a few shared nodes can multiply a small
+/// file into an enormous mesh).
+const MAX_MESH_VERTICES: usize = 1 << 24;
+const MAX_MESH_TRIANGLES: usize = 1 << 25;
+
+pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    let (document, reader) = load(path, bytes)?;
+    let mut vertices: Vec<[f32; 3]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    // A primitive shared by several nodes is decoded once.
+    let mut decoded: BTreeMap<(usize, usize), Option<Triangles>> = BTreeMap::new();
+    walk_scene(path, &document, |node, world| {
+        let Some(mesh) = node.mesh() else {
+            return Ok(());
+        };
+        for primitive in mesh.primitives() {
+            let local = match decoded.entry((mesh.index(), primitive.index())) {
+                std::collections::btree_map::Entry::Occupied(entry) => entry.into_mut(),
+                std::collections::btree_map::Entry::Vacant(entry) => {
+                    entry.insert(reader.triangles(&primitive, &mesh)?)
+                }
+            };
+            let Some((positions, local_triangles)) = local else {
+                continue;
+            };
+            if vertices.len() + positions.len() > MAX_MESH_VERTICES
+                || triangles.len() + local_triangles.len() > MAX_MESH_TRIANGLES
+            {
+                return Err(ImportError::malformed(
+                    path,
+                    Place::Path(format!("/nodes/{}", node.index())),
+                    format!(
+                        "the scene's triangle meshes exceed {MAX_MESH_VERTICES} vertices or \
+                         {MAX_MESH_TRIANGLES} triangles (meshes instanced by many nodes?)"
+                    ),
+                ));
+            }
+            // Both counts are bounded far below u32::MAX.
+            let base = vertices.len() as u32;
+            let mirrored = determinant(&world) < 0.0;
+            vertices.extend(positions.iter().map(|&p| transform(&world, p)));
+            triangles.extend(local_triangles.iter().map(|&[a, b, c]| {
+                if mirrored {
+                    [base + a, base + c, base + b]
+                } else {
+                    [base + a, base + b, base + c]
+                }
+            }));
+        }
+        Ok(())
+    })?;
+    Ok((vertices, triangles))
+}
+
+/// Parses the JSON (or GLB) and loads every buffer, checking each holds the
+/// bytes its `byteLength` announces.
+fn load<'a>(path: &'a Path, bytes: &[u8]) -> Result<(gltf::Gltf, Reader<'a>), ImportError> {
     let document = gltf::Gltf::from_slice(bytes).map_err(|e| crate_error(path, e))?;
     let mut reader = Reader {
         path,
@@ -80,8 +234,16 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         }
         reader.buffers.push(data);
     }
+    Ok((document, reader))
+}
 
-    let mut pieces = Vec::new();
+/// Visits every node instance of the default (or first) scene depth-first,
+/// parents before children, with its world matrix.
+fn walk_scene(
+    path: &Path,
+    document: &gltf::Gltf,
+    mut visit: impl FnMut(&gltf::Node, Matrix) -> Result<(), ImportError>,
+) -> Result<(), ImportError> {
     let roots: Vec<gltf::Node> = match document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -89,16 +251,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         Some(scene) => scene.nodes().collect(),
         None => Vec::new(),
     };
-    let identity: Matrix = [
-        [1.0, 0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ];
     // Depth-first over the scene graph; the depth bound guards against a
     // cycle the validation might let through.
     let mut stack: Vec<(gltf::Node, Matrix, usize)> =
-        roots.into_iter().rev().map(|n| (n, identity, 0)).collect();
+        roots.into_iter().rev().map(|n| (n, IDENTITY, 0)).collect();
     let mut visits = 0usize;
     while let Some((node, parent, depth)) = stack.pop() {
         // Nodes shared by several parents could make the walk exponential.
@@ -118,61 +274,13 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
             ));
         }
         let world = multiply(&parent, &node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                if let Some(piece) = reader.primitive(&primitive, &mesh, world, node.index())? {
-                    pieces.push(piece);
-                }
-            }
-        }
+        visit(&node, world)?;
         let children: Vec<_> = node.children().collect();
         for child in children.into_iter().rev() {
             stack.push((child, world, depth + 1));
         }
     }
-
-    let mut groom = Groom {
-        units: Units::METERS,
-        up_axis: UpAxis::Y,
-        ..Groom::default()
-    };
-    // Attributes every line primitive has, with the same type.
-    let mut common: Option<BTreeMap<String, AttributeValues>> = None;
-    for piece in &pieces {
-        let names: BTreeMap<String, AttributeValues> = piece
-            .attributes
-            .iter()
-            .map(|(name, values)| (name.clone(), empty_like(values)))
-            .collect();
-        common = Some(match common {
-            None => names,
-            Some(so_far) => so_far
-                .into_iter()
-                .filter(|(name, values)| names.get(name).is_some_and(|v| same_type(v, values)))
-                .collect(),
-        });
-    }
-    let mut attributes = common.unwrap_or_default();
-    for piece in &pieces {
-        for strand in &piece.strands {
-            groom.strand_vertex_counts.push(strand.len() as u32);
-            for &i in strand {
-                let p = piece.positions.get(i).copied().unwrap_or_default();
-                groom.points.push(transform(&piece.world, p));
-            }
-            for (name, values) in attributes.iter_mut() {
-                if let Some(source) = piece.attributes.get(name) {
-                    append_selected(values, source, strand);
-                }
-            }
-        }
-    }
-    for (name, values) in attributes {
-        groom.attributes.push(Attribute::new(name, values));
-    }
-    groom.frames = reader.frames(&document, &pieces)?;
-    groom.provenance.format = "gltf".into();
-    Ok(groom)
+    Ok(())
 }
 
 impl Reader<'_> {
@@ -197,25 +305,14 @@ impl Reader<'_> {
         };
         let positions = self.vec3(&position)?;
         let vertex_count = positions.len();
-        let indices: Vec<usize> = match primitive.indices() {
-            Some(accessor) => {
-                let values = self.integers(&accessor)?;
-                if let Some(bad) = values.iter().find(|&&i| i >= vertex_count) {
-                    return Err(self.error(
-                        format!("/accessors/{}", accessor.index()),
-                        format!("index {bad} is out of range ({vertex_count} vertices)"),
-                    ));
-                }
-                values
-            }
-            None => (0..vertex_count).collect(),
-        };
+        let indices = self.indices(primitive, vertex_count)?;
         let strands = match mode {
             Mode::LineStrip if indices.len() >= 2 => vec![indices],
             Mode::LineStrip => Vec::new(),
             _ => chain_segments(&indices),
         };
         let mut attributes = BTreeMap::new();
+        let mut per_strand = BTreeSet::new();
         for (semantic, accessor) in primitive.attributes() {
             let Semantic::Extras(name) = semantic else {
                 continue;
@@ -229,9 +326,27 @@ impl Reader<'_> {
                     ),
                 ));
             }
-            if let Some(values) = self.attribute(&accessor)? {
-                attributes.insert(name.to_lowercase(), values);
+            let marker = Marker::of(&accessor);
+            // A marker that does not fit the accessor is ignored.
+            let split = match marker.split_int {
+                true => self.split_integers(&accessor)?,
+                false => None,
+            };
+            let values = match split {
+                Some(values) => Some(values),
+                None => self.attribute(&accessor)?,
+            };
+            let Some(mut values) = values else {
+                continue;
+            };
+            if marker.int {
+                values = integers_if_exact(values);
             }
+            let name = marker.name.unwrap_or_else(|| name.to_lowercase());
+            if marker.strand && constant_along(&values, &strands) {
+                per_strand.insert(name.clone());
+            }
+            attributes.insert(name, values);
         }
         let mut targets = Vec::new();
         for target in primitive.morph_targets() {
@@ -253,10 +368,101 @@ impl Reader<'_> {
             positions,
             world,
             attributes,
+            per_strand,
             targets,
             default_weights,
             node,
         }))
+    }
+
+    /// The vertex indices of a primitive, each checked against the vertex
+    /// count; `0..vertex_count` for a primitive without indices.
+    fn indices(
+        &self,
+        primitive: &gltf::Primitive,
+        vertex_count: usize,
+    ) -> Result<Vec<usize>, ImportError> {
+        let Some(accessor) = primitive.indices() else {
+            return Ok((0..vertex_count).collect());
+        };
+        let values = self.integers(&accessor)?;
+        if let Some(bad) = values.iter().find(|&&i| i >= vertex_count) {
+            return Err(self.error(
+                format!("/accessors/{}", accessor.index()),
+                format!("index {bad} is out of range ({vertex_count} vertices)"),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// The positions and triangles (indices into those positions) of a
+    /// TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN primitive; `None` for other
+    /// modes. Triangles that repeat a vertex (how strips are joined) are left
+    /// out: they have no area.
+    fn triangles(
+        &self,
+        primitive: &gltf::Primitive,
+        mesh: &gltf::Mesh,
+    ) -> Result<Option<Triangles>, ImportError> {
+        let mode = primitive.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            return Ok(None);
+        }
+        let place = format!("/meshes/{}/primitives/{}", mesh.index(), primitive.index());
+        let Some(position) = primitive.get(&Semantic::Positions) else {
+            return Err(self.error(place, "triangle primitive without POSITION"));
+        };
+        let positions = self.vec3(&position)?;
+        if positions.len() > MAX_MESH_VERTICES {
+            return Err(self.error(
+                format!("/accessors/{}", position.index()),
+                format!(
+                    "{} vertices are more than the {MAX_MESH_VERTICES} a collider mesh may have",
+                    positions.len()
+                ),
+            ));
+        }
+        let indices = self.indices(primitive, positions.len())?;
+        let corner = |k: usize| indices.get(k).map_or(0, |&i| i as u32);
+        let mut triangles = Vec::new();
+        match mode {
+            Mode::Triangles => {
+                if indices.len() % 3 != 0 {
+                    return Err(self.error(
+                        place,
+                        format!(
+                            "TRIANGLES primitive with {} vertices (indices), not a multiple of 3",
+                            indices.len()
+                        ),
+                    ));
+                }
+                for k in (0..indices.len()).step_by(3) {
+                    triangles.push([corner(k), corner(k + 1), corner(k + 2)]);
+                }
+            }
+            // glTF 2.0 section 3.7.2.1: strip triangle i is (i, i+1, i+2)
+            // for even i and (i, i+2, i+1) for odd i, so all face one way;
+            // fan triangle i is (i+1, i+2, 0).
+            Mode::TriangleStrip => {
+                for k in 0..indices.len().saturating_sub(2) {
+                    triangles.push(if k % 2 == 0 {
+                        [corner(k), corner(k + 1), corner(k + 2)]
+                    } else {
+                        [corner(k), corner(k + 2), corner(k + 1)]
+                    });
+                }
+            }
+            _ => {
+                for k in 0..indices.len().saturating_sub(2) {
+                    triangles.push([corner(k + 1), corner(k + 2), corner(0)]);
+                }
+            }
+        }
+        triangles.retain(|[a, b, c]| a != b && b != c && a != c);
+        Ok(Some((positions, triangles)))
     }
 
     /// The bytes of each element of an accessor, after checking the whole
@@ -385,6 +591,26 @@ impl Reader<'_> {
         Ok(self
             .scalar_integers(accessor)?
             .map(|values| AttributeValues::Int(values.into_iter().map(|v| v as i32).collect())))
+    }
+
+    /// A VEC2 UNSIGNED_SHORT accessor holding 32-bit integers (low half
+    /// first); `None` if the accessor is not of that type.
+    fn split_integers(
+        &self,
+        accessor: &gltf::Accessor,
+    ) -> Result<Option<AttributeValues>, ImportError> {
+        if accessor.data_type() != DataType::U16
+            || accessor.dimensions() != Dimensions::Vec2
+            || accessor.normalized()
+        {
+            return Ok(None);
+        }
+        let values = self
+            .elements(accessor)?
+            .into_iter()
+            .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        Ok(Some(AttributeValues::Int(values)))
     }
 
     /// Frames from the first animation that drives morph-target weights.
@@ -606,12 +832,82 @@ fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
     m
 }
 
+/// Determinant of the linear (upper-left 3x3) part of a transform.
+fn determinant(m: &Matrix) -> f32 {
+    // Column-major: m[column][row].
+    m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2])
+        - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2])
+        + m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2])
+}
+
 fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
     let mut out = [0.0f32; 3];
     for (row, value) in out.iter_mut().enumerate() {
         *value = m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row];
     }
     out
+}
+
+/// What groombake's exporter keeps in an attribute accessor's
+/// `extras.groombake`; all unset for other files.
+#[derive(Default)]
+struct Marker {
+    name: Option<String>,
+    strand: bool,
+    int: bool,
+    split_int: bool,
+}
+
+impl Marker {
+    fn of(accessor: &gltf::Accessor) -> Marker {
+        let Some(raw) = accessor.extras() else {
+            return Marker::default();
+        };
+        let Ok(extras) = serde_json::from_str::<serde_json::Value>(raw.get()) else {
+            return Marker::default();
+        };
+        let marker = &extras["groombake"];
+        Marker {
+            name: marker["name"]
+                .as_str()
+                .filter(|name| !name.is_empty())
+                .map(String::from),
+            strand: marker["scope"] == "strand",
+            int: marker["type"] == "int",
+            split_int: marker["encoding"] == "i32_as_u16x2",
+        }
+    }
+}
+
+/// Float values that are all whole numbers in i32's range become integers.
+fn integers_if_exact(values: AttributeValues) -> AttributeValues {
+    match values {
+        AttributeValues::Float(floats)
+            if floats
+                .iter()
+                .all(|&v| v.fract() == 0.0 && v >= i32::MIN as f32 && v < i32::MAX as f32) =>
+        {
+            AttributeValues::Int(floats.into_iter().map(|v| v as i32).collect())
+        }
+        other => other,
+    }
+}
+
+/// Whether every strand's vertices (indices into `values`) hold one value.
+fn constant_along(values: &AttributeValues, strands: &[Vec<usize>]) -> bool {
+    fn constant<T: PartialEq>(values: &[T], strands: &[Vec<usize>]) -> bool {
+        strands.iter().all(|strand| {
+            let mut picked = strand.iter().map(|&i| values.get(i));
+            let first = picked.next().flatten();
+            first.is_some() && picked.all(|v| v == first)
+        })
+    }
+    match values {
+        AttributeValues::Float(v) => constant(v, strands),
+        AttributeValues::Vec2(v) => constant(v, strands),
+        AttributeValues::Vec3(v) => constant(v, strands),
+        AttributeValues::Int(v) => constant(v, strands),
+    }
 }
 
 fn empty_like(values: &AttributeValues) -> AttributeValues {
@@ -812,6 +1108,52 @@ mod tests {
     }
 
     #[test]
+    fn extras_markers_name_scope_and_type_attributes() {
+        let (_, bin) = hand_made(None);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let (json, _) = hand_made(Some(&format!(
+            "data:application/octet-stream;base64,{payload}"
+        )));
+        let marked = |json: &str, extras: &str| {
+            // The two _WIDTH accessors (1 and 7): the only SCALAR FLOAT
+            // accessors of three elements and of four.
+            json.replacen(
+                r#""count":3,"type":"SCALAR"}"#,
+                &format!(r#""count":3,"type":"SCALAR","extras":{extras}}}"#),
+                1,
+            )
+            .replacen(
+                r#""componentType":5126,"count":4,"type":"SCALAR"}"#,
+                &format!(r#""componentType":5126,"count":4,"type":"SCALAR","extras":{extras}}}"#),
+                1,
+            )
+        };
+        // The strip's widths differ along its strand: the per-strand marker
+        // is not honoured, the name is.
+        let json_marked = marked(&json, r#"{"groombake":{"name":"Width","scope":"strand"}}"#);
+        assert_ne!(json_marked, json);
+        let groom = parse(Path::new("t.gltf"), json_marked.as_bytes()).unwrap();
+        let width = groom.attribute("Width").unwrap();
+        assert_eq!(width.scope, groom::Scope::Vertex);
+        assert_eq!(width.values.len(), 7);
+        // Fractional floats marked int stay floats; a split encoding on a
+        // FLOAT accessor is ignored; unknown extras are harmless.
+        for extras in [
+            r#"{"groombake":{"type":"int","encoding":"i32_as_u16x2"}}"#,
+            r#"{"groombake":7}"#,
+            r#"[1,2]"#,
+        ] {
+            let json_marked = marked(&json, extras);
+            let groom = parse(Path::new("t.gltf"), json_marked.as_bytes()).unwrap();
+            assert_eq!(
+                groom.attribute("width").unwrap().values,
+                AttributeValues::Float(vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]),
+                "{extras}"
+            );
+        }
+    }
+
+    #[test]
     fn segments_chain_into_strands() {
         assert_eq!(
             chain_segments(&[0, 1, 1, 2, 3, 4, 4, 5, 5, 6, 7, 7, 7, 8]),
@@ -842,6 +1184,140 @@ mod tests {
     fn percent_escapes() {
         assert_eq!(percent_decode("my%20hair.bin"), "my hair.bin");
         assert_eq!(percent_decode("odd%2"), "odd%2");
+    }
+
+    /// Four vertices of a unit square drawn as TRIANGLES (u8 indices) by a
+    /// translated node and a mirroring node, as a TRIANGLE_STRIP, a
+    /// TRIANGLE_FAN, and a LINE_STRIP that triangle reading skips.
+    fn triangle_scene() -> String {
+        let mut bin = Vec::new();
+        for v in [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0,
+        ] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0, 1, 2, 2, 1, 3, 0, 0]);
+        let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let primitive = |mode: u32, indices: &str| {
+            format!(
+                r#"{{"primitives":[{{"mode":{mode},"attributes":{{"POSITION":0}}{indices}}}]}}"#
+            )
+        };
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1,2,3,4]}}],
+            "nodes":[{{"translation":[10,0,0],"mesh":0}},{{"scale":[-1,1,1],"mesh":0}},{{"mesh":1}},{{"mesh":2}},{{"mesh":3}}],
+            "meshes":[{},{},{},{}],
+            "accessors":[
+              {{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+              {{"bufferView":1,"componentType":5121,"count":6,"type":"SCALAR"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":6}}],
+            "buffers":[{{"byteLength":56,"uri":"data:application/octet-stream;base64,{payload}"}}]}}"#,
+            primitive(4, r#","indices":1"#),
+            primitive(5, ""),
+            primitive(6, ""),
+            primitive(3, ""),
+        )
+    }
+
+    fn normal_z(vertices: &[[f32; 3]], [a, b, c]: [u32; 3]) -> f32 {
+        let (a, b, c) = (
+            vertices[a as usize],
+            vertices[b as usize],
+            vertices[c as usize],
+        );
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    }
+
+    #[test]
+    fn triangles_of_every_mode_with_transforms_and_mirroring() {
+        let json = triangle_scene();
+        let (vertices, triangles) = parse_triangles(Path::new("t.gltf"), json.as_bytes()).unwrap();
+        assert_eq!(vertices.len(), 16);
+        assert_eq!(vertices[1], [11.0, 0.0, 0.0]);
+        assert_eq!(vertices[5], [-1.0, 0.0, 0.0]);
+        assert_eq!(
+            triangles,
+            vec![
+                [0, 1, 2],
+                [2, 1, 3],
+                // Mirrored by scale -1: winding reversed.
+                [4, 6, 5],
+                [6, 7, 5],
+                // Strip: odd triangles swap their last two corners.
+                [8, 9, 10],
+                [9, 11, 10],
+                // Fan around the first vertex.
+                [13, 14, 12],
+                [14, 15, 12],
+            ]
+        );
+        // The mirrored copies still face +z, like the originals.
+        for &t in &triangles[..6] {
+            assert!(normal_z(&vertices, t) > 0.0, "{t:?}");
+        }
+        // Strokes are no triangles; the curve reader still finds the line.
+        let groom = parse(Path::new("t.gltf"), json.as_bytes()).unwrap();
+        assert_eq!(groom.strand_vertex_counts, vec![4]);
+    }
+
+    #[test]
+    fn malformed_triangles_name_the_place() {
+        let json = triangle_scene();
+        let cases = [
+            (
+                r#""componentType":5121,"count":6"#,
+                r#""componentType":5121,"count":5"#,
+                "t.gltf:/meshes/0/primitives/0: TRIANGLES primitive with 5 vertices",
+            ),
+            (
+                r#""count":4,"type":"VEC3""#,
+                r#""count":40,"type":"VEC3""#,
+                "t.gltf:/accessors/0: 40 elements",
+            ),
+            (
+                r#""componentType":5121,"count":6,"type":"SCALAR""#,
+                r#""componentType":5126,"count":1,"type":"SCALAR""#,
+                "t.gltf:/accessors/1: indices are not unsigned integers",
+            ),
+        ];
+        for (from, to, expected) in cases {
+            let bad = json.replacen(from, to, 1);
+            assert_ne!(bad, json);
+            let e = parse_triangles(Path::new("t.gltf"), bad.as_bytes())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
+        // Index 3 becomes 9, past the four vertices.
+        let mut bin = Vec::new();
+        for v in [
+            0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0,
+        ] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+        let good = base64::engine::general_purpose::STANDARD
+            .encode([&bin[..], &[0, 1, 2, 2, 1, 3, 0, 0]].concat());
+        let bad = base64::engine::general_purpose::STANDARD
+            .encode([&bin[..], &[0, 1, 2, 2, 1, 9, 0, 0]].concat());
+        let json = json.replacen(&good, &bad, 1);
+        let e = parse_triangles(Path::new("t.gltf"), json.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.gltf:/accessors/1: index 9 is out of range (4 vertices)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn every_cut_of_the_pillow_sample_is_an_error() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../samples/pillow.glb");
+        let glb = std::fs::read(&path).unwrap();
+        let (vertices, triangles) = parse_triangles(&path, &glb).unwrap();
+        assert_eq!((vertices.len(), triangles.len()), (8, 12));
+        for cut in 0..glb.len() {
+            assert!(parse_triangles(&path, &glb[..cut]).is_err(), "cut {cut}");
+        }
     }
 
     #[test]

@@ -6,6 +6,11 @@
 //! `.hair` exporter writes back the same arrays. A missing array whose header
 //! default differs from cyHairFile's own default is materialised from that
 //! default, so no information of the file is lost.
+//!
+//! The header fields the groom has no place for (the flags, the defaults,
+//! the raw info bytes) go into `provenance.metadata` under the `hair.*` keys
+//! below, with the counts they describe, so that the `.hair` writer can
+//! reproduce any valid file byte for byte.
 
 use crate::binary::Cursor;
 use crate::ImportError;
@@ -23,6 +28,19 @@ pub const HAS_COLORS: u32 = 16;
 pub const DEFAULT_THICKNESS: f32 = 1.0;
 pub const DEFAULT_TRANSPARENCY: f32 = 0.0;
 pub const DEFAULT_COLOR: [f32; 3] = [1.0, 1.0, 1.0];
+
+/// `provenance.metadata` keys. Counts and flags are decimal; defaults are
+/// the bits of each f32 as `0x` hex (exact for -0.0 and NaN), colour
+/// components comma-separated; `hair.info` is the hex of the 88 info bytes,
+/// present only when the text before the first NUL does not say them all.
+pub const META_HAIR_COUNT: &str = "hair.hair_count";
+pub const META_POINT_COUNT: &str = "hair.point_count";
+pub const META_FLAGS: &str = "hair.flags";
+pub const META_DEFAULT_SEGMENTS: &str = "hair.default_segments";
+pub const META_DEFAULT_THICKNESS: &str = "hair.default_thickness";
+pub const META_DEFAULT_TRANSPARENCY: &str = "hair.default_transparency";
+pub const META_DEFAULT_COLOR: &str = "hair.default_color";
+pub const META_INFO: &str = "hair.info";
 
 pub fn read(path: &Path) -> Result<Groom, ImportError> {
     let bytes = crate::read_bytes(path)?;
@@ -185,6 +203,22 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     if let Some(colors) = colors {
         groom.set_attribute(Attribute::new("color", AttributeValues::Vec3(colors)));
     }
+    let bits = |v: f32| format!("{:#010x}", v.to_bits());
+    let metadata = &mut groom.provenance.metadata;
+    metadata.insert(META_HAIR_COUNT.into(), hair_count.to_string());
+    metadata.insert(META_POINT_COUNT.into(), point_count.to_string());
+    metadata.insert(META_FLAGS.into(), flags.to_string());
+    metadata.insert(META_DEFAULT_SEGMENTS.into(), default_segments.to_string());
+    metadata.insert(META_DEFAULT_THICKNESS.into(), bits(default_thickness));
+    metadata.insert(META_DEFAULT_TRANSPARENCY.into(), bits(default_transparency));
+    metadata.insert(META_DEFAULT_COLOR.into(), default_color.map(bits).join(","));
+    // Bytes after the terminating NUL, or text that is not UTF-8.
+    let mut plain = [0u8; 88];
+    plain[..info.len().min(88)].copy_from_slice(&info.as_bytes()[..info.len().min(88)]);
+    if plain[..] != info_bytes[..] {
+        let hex: String = info_bytes.iter().map(|b| format!("{b:02x}")).collect();
+        metadata.insert(META_INFO.into(), hex);
+    }
     groom.provenance.format = "hair".into();
     groom.provenance.info = info;
     Ok(groom)
@@ -254,6 +288,33 @@ mod tests {
         );
         assert_eq!(groom.provenance.info, "hello");
         assert_eq!(groom.provenance.format, "hair");
+    }
+
+    #[test]
+    fn header_fields_go_to_metadata() {
+        let mut bytes = file(HAS_SEGMENTS | HAS_POINTS, &[2], &three_points(), 9);
+        let groom = parse(Path::new("t.hair"), &bytes).unwrap();
+        let metadata = &groom.provenance.metadata;
+        let get = |key: &str| metadata.get(key).map(String::as_str);
+        assert_eq!(get(META_HAIR_COUNT), Some("1"));
+        assert_eq!(get(META_POINT_COUNT), Some("3"));
+        assert_eq!(get(META_FLAGS), Some("3"));
+        assert_eq!(get(META_DEFAULT_SEGMENTS), Some("9"));
+        assert_eq!(get(META_DEFAULT_THICKNESS), Some("0x3f000000"));
+        assert_eq!(
+            get(META_DEFAULT_COLOR),
+            Some("0x3dcccccd,0x3e4ccccd,0x3e99999a")
+        );
+        // "hello" and zeros: the text says it all.
+        assert_eq!(get(META_INFO), None);
+        bytes[127] = 7;
+        let groom = parse(Path::new("t.hair"), &bytes).unwrap();
+        let hex = &groom.provenance.metadata[META_INFO];
+        assert!(
+            hex.starts_with("68656c6c6f00") && hex.ends_with("07"),
+            "{hex}"
+        );
+        assert_eq!(groom.provenance.info, "hello");
     }
 
     #[test]

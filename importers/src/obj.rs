@@ -155,7 +155,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
 }
 
 /// Whitespace-separated tokens with their 1-based columns.
-fn tokens_with_columns(text: &str) -> impl Iterator<Item = (usize, &str)> {
+pub(crate) fn tokens_with_columns(text: &str) -> impl Iterator<Item = (usize, &str)> {
     let mut rest = text;
     let mut offset = 0usize;
     std::iter::from_fn(move || {

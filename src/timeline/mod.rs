@@ -2,8 +2,11 @@
 //! (this module), the stages that drive the simulation ([`stages`]) and the
 //! bake that runs them and writes the exports ([`bake`]).
 
+pub mod bake;
 pub mod motion;
+pub mod report;
 pub mod schema;
+pub mod stages;
 
 use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
 use serde_spanned::Spanned;
@@ -442,7 +445,8 @@ impl Timeline {
             let v = b.get_ref();
             let finite = v.from.iter().chain(v.to.iter()).all(|x| x.is_finite());
             let length: f32 = (0..3).map(|k| (v.to[k] - v.from[k]).powi(2)).sum();
-            if !finite || length <= 0.0 || !(v.strength >= 0.0) || !(v.hydrogen_rate >= 0.0) {
+            let rates_ok = v.strength >= 0.0 && v.hydrogen_rate >= 0.0;
+            if !finite || length <= 0.0 || !rates_ok {
                 return fail(
                     b.span(),
                     "blower needs distinct finite `from`/`to` and non-negative strength and rate"
@@ -503,7 +507,7 @@ fn check_drive(
     drive: &Spanned<schema::BondDriveSpec>,
 ) -> Result<(), TimelineError> {
     let d = drive.get_ref();
-    if !(0.0..=1.0).contains(&d.target) || !(d.time.is_finite() && d.time > 0.0) {
+    if !((0.0..=1.0).contains(&d.target) && d.time.is_finite() && d.time > 0.0) {
         return Err(timeline.error_at(
             drive.span(),
             "a drive needs target in [0, 1] and a positive time",

@@ -116,8 +116,8 @@ mod tests {
         assert!((mid.translation[1] - 0.5).abs() < 1e-12);
         // Halfway to 90 degrees about Y is 45 degrees.
         let expected = quaternion_from_euler_degrees([0.0, 45.0, 0.0]);
-        for k in 0..4 {
-            assert!((mid.rotation[k] - expected[k]).abs() < 1e-9);
+        for (got, want) in mid.rotation.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-9);
         }
         assert_eq!(pose_at(&[], 1.0), Pose::IDENTITY);
     }

@@ -2,7 +2,7 @@
 //! USC-HairSalon/cyHair files, lossless `.hair`, glTF handed to the Khronos
 //! validator, animated glTF round trips, and truncated input.
 
-use crate::util::{hand_to_validators, shared_data, TestDir};
+use crate::util::{hand_to_validators, sample, shared_data, TestDir};
 use groom::Frame;
 use serde_json::json;
 
@@ -100,7 +100,7 @@ fn animated_glb_round_trips_its_frames() {
         "7",
     ]);
     let mut groom = importers::read(&dir.path("wavy.glb")).unwrap();
-    // An integer per strand: written as 16-bit `_STRAND_ID`, read back per vertex.
+    // An integer per strand: written as 16-bit `_STRAND_ID`, marked per strand.
     groom.set_attribute(groom::Attribute::per_strand(
         "strand_id",
         groom::AttributeValues::Int((0..20).map(|i| i * 1000 - 5000).collect()),
@@ -134,12 +134,13 @@ fn animated_glb_round_trips_its_frames() {
     for file in ["sway.glb", "again.glb"] {
         let back = importers::read(&dir.path(file)).unwrap();
         assert_eq!(back.strand_vertex_counts, groom.strand_vertex_counts);
-        let Some(groom::AttributeValues::Int(ids)) = back.attribute("strand_id").map(|a| &a.values)
-        else {
-            panic!("{file}: no integer strand_id attribute");
-        };
-        let last = groom.vertex_count() - 1;
-        assert_eq!((ids[0], ids[last]), (-5000, 14000), "{file}");
+        for name in ["strand_id", "root_uv"] {
+            assert_eq!(
+                back.attribute(name),
+                groom.attribute(name),
+                "{file}: {name}"
+            );
+        }
         assert_eq!(back.frames.len(), frames.len(), "{file}");
         for (k, (expected, got)) in frames.iter().zip(&back.frames).enumerate() {
             assert!((expected.time - got.time).abs() < 1e-6, "{file} frame {k}");
@@ -239,5 +240,96 @@ fn empty_roots_of_data_survive_glb() {
         &dir.path("roots.glb"),
         "formats_empty_roots",
         json!({"kind": "gltf", "primitives": 1, "vertices": 7}),
+    );
+}
+
+#[test]
+fn collider_samples_load_and_the_pillow_goes_to_the_validator() {
+    let (head_vertices, head) = importers::mesh::read_triangles(&sample("head.obj")).unwrap();
+    assert_eq!((head_vertices.len(), head.len()), (642, 1280));
+    let (pillow_vertices, pillow) = importers::mesh::read_triangles(&sample("pillow.glb")).unwrap();
+    assert_eq!((pillow_vertices.len(), pillow.len()), (8, 12));
+    hand_to_validators(
+        &sample("pillow.glb"),
+        "formats_pillow_sample",
+        json!({"kind": "gltf", "primitives": 1, "vertices": 8}),
+    );
+}
+
+/// A `.hair` file whose header the general rule would not write: uniform
+/// strands with a segments array, a default segment count that is unused,
+/// non-standard default thickness and colour without arrays, bytes after the
+/// info text's NUL.
+fn unusual_hair() -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend_from_slice(b"HAIR");
+    for word in [2u32, 6, 1 | 2, 77] {
+        b.extend_from_slice(&word.to_le_bytes());
+    }
+    for value in [0.5f32, 0.0, 0.25, 0.5, 0.75] {
+        b.extend_from_slice(&value.to_le_bytes());
+    }
+    let mut info = [0u8; 88];
+    info[..7].copy_from_slice(b"unusual");
+    info[80..].copy_from_slice(b"leftover");
+    b.extend_from_slice(&info);
+    b.extend_from_slice(&[2, 0, 2, 0]);
+    for k in 0..18 {
+        b.extend_from_slice(&(k as f32 * 0.5).to_le_bytes());
+    }
+    b
+}
+
+#[test]
+fn unusual_hair_header_survives_convert_byte_for_byte() {
+    let dir = TestDir::new();
+    std::fs::write(dir.path("unusual.hair"), unusual_hair()).unwrap();
+    dir.run_ok(&["convert", "unusual.hair", "copy.hair"]);
+    assert!(std::fs::read(dir.path("copy.hair")).unwrap() == unusual_hair());
+    // Through glTF the header is gone: the general rule writes the arrays.
+    dir.run_ok(&["convert", "unusual.hair", "unusual.glb", "--units", "m"]);
+    dir.run_ok(&["convert", "unusual.glb", "back.hair", "--units", "cm"]);
+    let back = importers::read(&dir.path("back.hair")).unwrap();
+    let original = importers::read(&dir.path("unusual.hair")).unwrap();
+    assert_eq!(back.strand_vertex_counts, original.strand_vertex_counts);
+    assert_eq!(
+        back.attribute("width").unwrap().values,
+        original.attribute("width").unwrap().values
+    );
+}
+
+#[test]
+fn per_strand_and_wide_integer_attributes_survive_glb_and_validate() {
+    use groom::{Attribute, AttributeValues, Groom, Scope};
+    let dir = TestDir::new();
+    let mut groom = Groom::from_strands([
+        vec![[0.0, 0.0, 0.0], [0.0, 0.1, 0.0]],
+        vec![[0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.1, 0.2, 0.0]],
+    ]);
+    groom.units = groom::Units::METERS;
+    groom.set_attribute(Attribute::per_strand(
+        "Clump ID",
+        AttributeValues::Int(vec![i32::MIN, 1 << 30]),
+    ));
+    groom.set_attribute(Attribute::per_strand(
+        "Root_UV",
+        AttributeValues::Vec2(vec![[0.25, 0.5], [0.75, 1.0]]),
+    ));
+    let path = dir.path("attributes.glb");
+    exporters::write(&path, &groom).unwrap();
+    // Through the binary too: convert keeps what the importer rebuilt.
+    dir.run_ok(&["convert", "attributes.glb", "again.gltf"]);
+    for file in ["attributes.glb", "again.gltf"] {
+        let back = importers::read(&dir.path(file)).unwrap();
+        for attribute in &groom.attributes {
+            let got = back.attribute(&attribute.name).unwrap();
+            assert_eq!(got.scope, Scope::Strand, "{file}: {}", attribute.name);
+            assert_eq!(got.values, attribute.values, "{file}: {}", attribute.name);
+        }
+    }
+    hand_to_validators(
+        &path,
+        "formats_strand_attributes",
+        json!({"kind": "gltf", "primitives": 1, "vertices": 5}),
     );
 }

@@ -7,5 +7,9 @@
 mod util;
 
 mod alembic;
+mod bake;
+mod bench;
 mod cli;
 mod formats;
+mod golden;
+mod usd;
