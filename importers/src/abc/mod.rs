@@ -178,6 +178,111 @@ mod tests {
         );
     }
 
+    /// A Curves scene written with the exporter's low-level archive API:
+    /// `P` with one stored sample of `points` points repeated `samples` times.
+    fn repeated_points_file(points: usize, samples: u32) -> Vec<u8> {
+        use exporters::abc::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter};
+        let mut archive = ArchiveWriter::new(std::io::Cursor::new(Vec::new())).unwrap();
+        let mut p = PropertyWriter::new("P", String::new(), PropertyKind::Array, Pod::F32, 3, 0);
+        p.set_sample(&mut archive, &vec![0u8; 12 * points]).unwrap();
+        for _ in 1..samples {
+            p.repeat_previous();
+        }
+        let mut n = PropertyWriter::new(
+            "nVertices",
+            String::new(),
+            PropertyKind::Array,
+            Pod::I32,
+            1,
+            0,
+        );
+        n.set_sample(&mut archive, &(points as i32).to_le_bytes())
+            .unwrap();
+        let closed = vec![
+            p.close(&mut archive).unwrap(),
+            n.close(&mut archive).unwrap(),
+        ];
+        let geom = archive.close_compound(".geom", "", closed).unwrap();
+        let schema = metadata(&[("schema", "AbcGeom_Curve_v2")]);
+        let curves = archive
+            .close_object("curves", &schema, vec![geom], Vec::new())
+            .unwrap();
+        archive.finish("", vec![curves]).unwrap().into_inner()
+    }
+
+    /// Regression: a header may claim many samples that all share one
+    /// stored block; the frames they would make must not be built.
+    #[test]
+    fn regression_shared_samples_cannot_expand_without_bound() {
+        let bytes = repeated_points_file(1000, 200_000);
+        assert!(bytes.len() < 20_000, "{} bytes", bytes.len());
+        let text = assert_clean_error(Path::new("bomb.abc"), &bytes);
+        assert!(text.contains("bomb.abc:/curves/.geom/P"), "{text}");
+        assert!(text.contains("far more data than the file holds"), "{text}");
+        // A few repeats are fine: they are frames.
+        let groom = parse(Path::new("ok.abc"), &repeated_points_file(10, 5)).unwrap();
+        assert_eq!(groom.frames.len(), 5);
+    }
+
+    /// Curves whose vertex counts change between samples cannot be one
+    /// groom: refused by property path. The check walks the stored samples,
+    /// not the (unchecked) sample count of the header.
+    #[test]
+    fn changing_topology_is_refused() {
+        use exporters::abc::archive::{ArchiveWriter, Pod, PropertyKind, PropertyWriter};
+        let mut archive = ArchiveWriter::new(std::io::Cursor::new(Vec::new())).unwrap();
+        let mut p = PropertyWriter::new("P", String::new(), PropertyKind::Array, Pod::F32, 3, 0);
+        p.set_sample(&mut archive, &[0u8; 24]).unwrap();
+        let mut n = PropertyWriter::new(
+            "nVertices",
+            String::new(),
+            PropertyKind::Array,
+            Pod::I32,
+            1,
+            0,
+        );
+        n.set_sample(&mut archive, &2i32.to_le_bytes()).unwrap();
+        for _ in 0..1000 {
+            n.repeat_previous();
+        }
+        n.set_sample(&mut archive, &[1, 0, 0, 0, 1, 0, 0, 0])
+            .unwrap();
+        let closed = vec![
+            p.close(&mut archive).unwrap(),
+            n.close(&mut archive).unwrap(),
+        ];
+        let geom = archive.close_compound(".geom", "", closed).unwrap();
+        let curves = archive
+            .close_object("hair", "schema=AbcGeom_Curve_v2", vec![geom], Vec::new())
+            .unwrap();
+        let bytes = archive.finish("", vec![curves]).unwrap().into_inner();
+        let text = assert_clean_error(Path::new("topo.abc"), &bytes);
+        assert!(
+            text.contains("topo.abc:/hair/.geom/nVertices: the curve topology changes"),
+            "{text}"
+        );
+    }
+
+    /// Regression: an object group listed as its own descendant would make
+    /// the tree walk endless; the reader refuses a group it has seen.
+    #[test]
+    fn regression_cyclic_object_tree_is_refused() {
+        let dir = TempDir::new("cycle");
+        let mut bytes = exported(&dir, "cycle.abc", &sample_groom());
+        let (top, groom_object) = {
+            let ogawa = ogawa::Ogawa::open(&bytes).unwrap();
+            let root = ogawa.group(ogawa.root()).unwrap();
+            let top = root[2];
+            (top, ogawa.group(top).unwrap()[1])
+        };
+        // /groom's children: [properties, curves, headers]; point its child
+        // at the top object instead.
+        let at = groom_object as usize + 8 + 8;
+        bytes[at..at + 8].copy_from_slice(&top.to_le_bytes());
+        let text = assert_clean_error(Path::new("cycle.abc"), &bytes);
+        assert!(text.contains("used twice"), "{text}");
+    }
+
     fn sample_groom() -> Groom {
         let mut groom = Groom::from_strands([
             vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.5]],
@@ -237,6 +342,16 @@ mod tests {
             Some((&AttributeValues::Int(vec![0, 0]), Scope::Strand))
         );
         assert!(back.provenance.info.starts_with("groombake "));
+    }
+
+    #[test]
+    fn empty_groom_round_trips() {
+        let dir = TempDir::new("empty");
+        let path = dir.0.join("empty.abc");
+        exporters::write(&path, &Groom::default()).unwrap();
+        let back = read(&path).unwrap();
+        assert_eq!(back.strand_count(), 0);
+        assert_eq!(back.vertex_count(), 0);
     }
 
     #[test]

@@ -454,14 +454,16 @@ impl SceneReader<'_, '_> {
         }
         let first = self.archive.sample(n_vertices, 0)?;
         // Curves whose topology changes over time cannot become one groom.
-        if !(n_vertices.first_changed == 0 && n_vertices.last_changed == 0) {
-            for index in 1..=n_vertices.last_changed {
-                if self.archive.sample(n_vertices, index)? != first {
-                    return Err(Fault::path(
-                        &n_vertices.path,
-                        format!("the curve topology changes at sample {index} (not supported)"),
-                    ));
-                }
+        // Comparing the stored samples covers every sample, and there are no
+        // more of them than the file has room for.
+        let per_sample = if n_vertices.kind == Kind::Array { 2 } else { 1 };
+        let stored = n_vertices.samples.len() / per_sample;
+        for index in 1..stored as u32 {
+            if self.archive.stored_sample(n_vertices, index)? != first {
+                return Err(Fault::path(
+                    &n_vertices.path,
+                    format!("the curve topology changes at stored sample {index} (not supported)"),
+                ));
             }
         }
         let values = self.sample_values(n_vertices, 0)?;
