@@ -36,7 +36,7 @@ pub struct ValidateArgs {
 }
 
 /// Maps bake errors on bad input to exit code 2.
-fn classify(error: BakeError) -> anyhow::Error {
+pub fn classify(error: BakeError) -> anyhow::Error {
     if error.is_bad_input() {
         BadInput(error.to_string()).into()
     } else {
@@ -54,8 +54,9 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         threads: args.threads,
         seed: args.seed,
         progress: !args.quiet && std::io::stderr().is_terminal(),
+        dry: false,
     };
-    let report = bake(&timeline, &options).map_err(classify)?;
+    let report = bake(&timeline, &options).map_err(classify)?.report;
     if let Some(path) = &args.report {
         let mut file = groom::AtomicFile::create(path)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;

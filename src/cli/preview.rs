@@ -57,6 +57,9 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
+    if importers::extension_of(&args.file) == "toml" {
+        return preview_timeline(&args);
+    }
     let groom = super::read_groom(&args.file)?;
     let options = PreviewOptions {
         width: args.size.0,
@@ -94,4 +97,54 @@ fn explain(file: &Path, error: PreviewError) -> anyhow::Error {
     } else {
         error.into()
     }
+}
+
+/// A timeline: bakes it in memory (no exports) and draws the groom before
+/// the first stage and after each stage; `--frame N` draws only snapshot N
+/// (0 = before). The timeline's `[preview]` gives defaults for colour and view.
+fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
+    use groombake::timeline::bake::{bake, sheet_options, BakeOptions};
+    use groombake::timeline::Timeline;
+    if !args.frames.is_empty() {
+        return Err(BadInput(format!(
+            "{}: --frames applies to animated groom files; a timeline draws its stages (use --frame N for one)",
+            args.file.display()
+        ))
+        .into());
+    }
+    let timeline = Timeline::load(&args.file).map_err(|e| BadInput(e.to_string()))?;
+    let options = BakeOptions {
+        dry: true,
+        ..BakeOptions::default()
+    };
+    let outcome = bake(&timeline, &options).map_err(super::bake::classify)?;
+    let mut preview_options = sheet_options(&timeline);
+    preview_options.width = args.size.0;
+    preview_options.height = args.size.1;
+    preview_options.view = args.view;
+    if args.color.is_some() {
+        preview_options.color_by = args.color.clone();
+    }
+    let snapshots: Vec<&(String, groom::Groom)> = match args.frame {
+        Some(n) => vec![outcome.snapshots.get(n).ok_or_else(|| {
+            BadInput(format!(
+                "{}: --frame {n}: the timeline has {} snapshots (before and after each stage)",
+                args.file.display(),
+                outcome.snapshots.len()
+            ))
+        })?],
+        None => outcome.snapshots.iter().collect(),
+    };
+    let entries: Vec<SheetEntry> = snapshots
+        .iter()
+        .map(|(label, groom)| SheetEntry {
+            label,
+            groom,
+            frame: None,
+        })
+        .collect();
+    let image = preview::render_sheet(&entries, &preview_options)
+        .map_err(|error| explain(&args.file, error))?;
+    preview::write_png(&image, &args.output)?;
+    Ok(())
 }

@@ -26,6 +26,16 @@ pub struct BakeOptions {
     pub seed: Option<u64>,
     /// Show progress bars (the caller decides: `-q`, not a terminal).
     pub progress: bool,
+    /// Run without writing the timeline's exports and sheet (a preview of
+    /// the timeline keeps only the snapshots).
+    pub dry: bool,
+}
+
+/// What a bake leaves besides its files: the report and the groom before
+/// the first stage and after each stage (with bond rates and wetness).
+pub struct BakeOutcome {
+    pub report: BakeReport,
+    pub snapshots: Vec<(String, Groom)>,
 }
 
 /// Why a bake failed.
@@ -49,6 +59,8 @@ pub enum BakeError {
     },
     #[error("thread pool: {0}")]
     Threads(String),
+    #[error(transparent)]
+    Preview(#[from] crate::preview::PreviewError),
 }
 
 impl BakeError {
@@ -274,6 +286,45 @@ fn groom_now(base: &Groom, strands: &StrandSet, points: Vec<[f32; 3]>, with_stat
     groom
 }
 
+/// The preview options of the timeline's `[preview]` (or the defaults).
+pub fn sheet_options(timeline: &Timeline) -> crate::preview::PreviewOptions {
+    let mut options = crate::preview::PreviewOptions::default();
+    if let Some(p) = &timeline.file.preview {
+        let [w, h] = *p.size.get_ref();
+        options.width = w;
+        options.height = h;
+        options.view = p.view.get_ref().parse().unwrap_or(options.view);
+        options.color_by = p.color.as_ref().map(|c| c.get_ref().clone());
+    }
+    options
+}
+
+/// Renders the before/after sheet of a bake and writes it as a PNG.
+fn write_sheet(
+    timeline: &Timeline,
+    snapshots: &[(String, Groom)],
+    path: &Path,
+) -> Result<(), BakeError> {
+    let options = sheet_options(timeline);
+    let entries: Vec<crate::preview::SheetEntry> = snapshots
+        .iter()
+        .map(|(label, groom)| crate::preview::SheetEntry {
+            label,
+            groom,
+            frame: None,
+        })
+        .collect();
+    let image = crate::preview::render_sheet(&entries, &options)?;
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).map_err(|source| BakeError::Io {
+            file: path.to_path_buf(),
+            source,
+        })?;
+    }
+    crate::preview::write_png(&image, path)?;
+    Ok(())
+}
+
 fn solver_for(parameters: SolverParameters) -> Result<Solver, BakeError> {
     Ok(Solver::new(parameters)?)
 }
@@ -344,7 +395,7 @@ fn progress_bars(
 }
 
 /// Runs the timeline and writes its exports.
-pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeReport, BakeError> {
+pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, BakeError> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(threads) = options.threads {
         builder = builder.num_threads(threads);
@@ -359,7 +410,7 @@ fn bake_in_pool(
     timeline: &Timeline,
     options: &BakeOptions,
     threads: usize,
-) -> Result<BakeReport, BakeError> {
+) -> Result<BakeOutcome, BakeError> {
     let started = Instant::now();
     let Prepared {
         groom,
@@ -385,7 +436,13 @@ fn bake_in_pool(
 
     // Open the animated exports and write frame 0.
     let mut animated = Vec::new();
-    for (index, e) in timeline.file.exports.iter().enumerate() {
+    // A dry run (a preview of the timeline) writes no file.
+    let exports: &[super::schema::ExportSpec] = if options.dry {
+        &[]
+    } else {
+        &timeline.file.exports
+    };
+    for (index, e) in exports.iter().enumerate() {
         if e.what != ExportWhat::Animated {
             continue;
         }
@@ -439,6 +496,10 @@ fn bake_in_pool(
         Ok(())
     };
     write_frames(&mut animated, &strands, 0)?;
+    let mut snapshots = vec![(
+        "before".to_string(),
+        groom_now(&groom, &strands, strands.positions().to_vec(), false),
+    )];
 
     let (_multi, overall, stage_bar) = progress_bars(options, total_steps);
     let mut report = BakeReport {
@@ -543,6 +604,10 @@ fn bake_in_pool(
             strands = with_frames_from_positions(&groom, &strands, &material_of(timeline))?;
         }
         global_time += steps as f64 * dt;
+        snapshots.push((
+            format!("after {}", spec.name.as_deref().unwrap_or(plan.kind.name())),
+            groom_now(&groom, &strands, strands.positions().to_vec(), false),
+        ));
         if !stage_report.contained_strands.is_empty() {
             stage_report.warnings.push(format!(
                 "{} strand(s) turned non-finite and were frozen: {:?}",
@@ -563,12 +628,12 @@ fn bake_in_pool(
     overall.finish_and_clear();
 
     // Finish the animated exports, then write the static ones.
-    let mut frames_of = vec![None; timeline.file.exports.len()];
+    let mut frames_of = vec![None; exports.len()];
     for a in animated {
         frames_of[a.index] = Some(a.frames_written);
         a.writer.finish()?;
     }
-    for (index, e) in timeline.file.exports.iter().enumerate() {
+    for (index, e) in exports.iter().enumerate() {
         let path = output_path(options, e.path.get_ref());
         if e.what != ExportWhat::Animated {
             let (units, up) = export_units(timeline, index);
@@ -603,7 +668,22 @@ fn bake_in_pool(
             frames: frames_of[index],
         });
     }
+    if let (Some(preview), false) = (&timeline.file.preview, options.dry) {
+        let path = output_path(options, preview.sheet.get_ref());
+        write_sheet(timeline, &snapshots, &path)?;
+        let (bytes, sha256) = size_and_sha256(&path).map_err(|source| BakeError::Io {
+            file: path.clone(),
+            source,
+        })?;
+        report.outputs.push(OutputReport {
+            path: path.display().to_string(),
+            what: "sheet".into(),
+            bytes,
+            sha256,
+            frames: None,
+        });
+    }
     report.simulated_seconds = total_time;
     report.wall_seconds = started.elapsed().as_secs_f64();
-    Ok(report)
+    Ok(BakeOutcome { report, snapshots })
 }

@@ -313,6 +313,25 @@ impl Timeline {
                 }
             }
         }
+        if let Some(preview) = &f.preview {
+            let path = Path::new(preview.sheet.get_ref());
+            if importers::extension_of(path) != "png" {
+                return fail(
+                    preview.sheet.span(),
+                    "the preview sheet is a PNG: name it *.png".into(),
+                );
+            }
+            let [w, h] = *preview.size.get_ref();
+            if !(1..=4096).contains(&w) || !(1..=4096).contains(&h) {
+                return fail(
+                    preview.size.span(),
+                    "preview size must be 1 to 4096 pixels each way".into(),
+                );
+            }
+            if let Err(e) = preview.view.get_ref().parse::<crate::preview::View>() {
+                return fail(preview.view.span(), e);
+            }
+        }
         Ok(dt)
     }
 
@@ -466,7 +485,7 @@ impl Timeline {
                 && (0.0..=1.0).contains(&v.disulfide_cut)
                 && phases_ok)
             {
-                return fail(r.span(), "rod needs a positive radius, root_gap >= 0, disulfide_cut in [0, 1] and increasing phases in (0, 1]".into());
+                return fail(r.span(), "rod needs a positive radius, root_gap >= 0, disulfide_cut in [0, 1], increasing phases in (0, 1] and a non-zero axis".into());
             }
         }
         match (&stage.wind, kind) {

@@ -25,6 +25,33 @@ pub struct TimelineFile {
     pub stages: Spanned<Vec<StageSpec>>,
     #[serde(default, rename = "export")]
     pub exports: Vec<ExportSpec>,
+    /// A contact sheet of the groom before and after each stage.
+    pub preview: Option<PreviewSpec>,
+}
+
+/// The bake's contact sheet: one picture before the first stage and one
+/// after each stage, side by side with labels.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PreviewSpec {
+    /// The PNG to write, relative to `--out`.
+    pub sheet: Spanned<String>,
+    /// Colour strands by this attribute (e.g. `bond_hydrogen`, `wetness`).
+    pub color: Option<Spanned<String>>,
+    /// Size of each picture, pixels.
+    #[serde(default = "default_preview_size")]
+    pub size: Spanned<[u32; 2]>,
+    /// `front`, `side`, `top` or `persp`.
+    #[serde(default = "default_preview_view")]
+    pub view: Spanned<String>,
+}
+
+fn default_preview_size() -> Spanned<[u32; 2]> {
+    Spanned::new(0..0, [512, 512])
+}
+
+fn default_preview_view() -> Spanned<String> {
+    Spanned::new(0..0, "front".to_string())
 }
 
 /// Where the groom comes from: a file (any importer, including a `state`
@@ -316,6 +343,9 @@ pub struct RodSpec {
     pub phases: [f64; 3],
     /// Fraction of the disulfide bonds the lotion cuts (the paper: 20 %).
     pub disulfide_cut: f32,
+    /// Direction of the rods' axes; default: across each strand's tip,
+    /// horizontal (along X for hair hanging straight down).
+    pub axis: Option<[f32; 3]>,
 }
 
 impl Default for RodSpec {
@@ -325,6 +355,7 @@ impl Default for RodSpec {
             root_gap: 0.02,
             phases: [0.3, 0.4, 0.8],
             disulfide_cut: 0.2,
+            axis: None,
         }
     }
 }

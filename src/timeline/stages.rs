@@ -56,6 +56,7 @@ pub struct StagePlan {
 #[derive(Debug, Clone, Copy)]
 pub struct PermPlan {
     pub radius: f32,
+    pub axis: Option<[f32; 3]>,
     pub root_gap: f32,
     pub roll_end: f64,
     pub cut_end: f64,
@@ -132,6 +133,7 @@ impl StagePlan {
                 }
                 perm = Some(PermPlan {
                     radius: rod.radius,
+                    axis: rod.axis,
                     root_gap: rod.root_gap,
                     roll_end: t_roll,
                     cut_end: t_cut,
@@ -271,7 +273,14 @@ impl PermRods {
                 let total = arc.last().copied().unwrap_or(0.0);
                 let n = points.len();
                 let tangent = unit(sub(points[n - 1], points[n - 2]))?;
-                let axis = unit(cross(tangent, [0.0, 1.0, 0.0]))
+                // The rod lies across the tip: the given axis made
+                // perpendicular to the tangent, or a horizontal one.
+                let given = plan.axis.map(|a| a.map(f64::from)).and_then(|a| {
+                    let along = a[0] * tangent[0] + a[1] * tangent[1] + a[2] * tangent[2];
+                    unit([0, 1, 2].map(|k| a[k] - along * tangent[k]))
+                });
+                let axis = given
+                    .or_else(|| unit(cross(tangent, [0.0, 0.0, 1.0])))
                     .or_else(|| unit(cross(tangent, [1.0, 0.0, 0.0])))?;
                 let normal = cross(axis, tangent);
                 Some(RodStrand {

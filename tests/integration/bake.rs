@@ -282,3 +282,31 @@ fn report_lists_stages_and_outputs_with_sha256() {
     let anim = read(&dir.root().join("o/out/anim.glb"));
     assert_eq!(anim.frames.len(), 10);
 }
+
+/// Width and height from a PNG's IHDR chunk.
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+    let be = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+#[test]
+fn bake_writes_a_sheet_before_and_after_each_stage_and_preview_draws_a_timeline() {
+    let dir = TestDir::new();
+    let timeline = "[groom]\ngenerate = { strands = 6, layout = \"swatch\" }\n[[stage]]\nkind = \"wet\"\nduration = 0.05\n[[stage]]\nkind = \"dry\"\nduration = 0.05\n[preview]\nsheet = \"sheet.png\"\ncolor = \"bond_hydrogen\"\nsize = [64, 48]\n";
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q", "--report", "r.json"]);
+    // Three pictures (before, after wet, after dry) side by side, each
+    // under a label strip.
+    let (w, h) = png_size(&dir.path("sheet.png"));
+    assert!(w >= 3 * 64 && h > 48, "sheet is {w}x{h}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path("r.json")).unwrap()).unwrap();
+    assert!(report["outputs"].as_array().unwrap().iter().any(|o| o["what"] == "sheet"));
+
+    dir.run_ok(&["preview", "t.toml", "-o", "p.png", "--size", "40x40", "--frame", "2"]);
+    let (w, h) = png_size(&dir.path("p.png"));
+    assert!(w >= 40 && w < 80 && h > 40, "one snapshot is {w}x{h}");
+    let e = dir.run_fail(&["preview", "t.toml", "-o", "q.png", "--frame", "9"], 2);
+    assert!(e.contains("3 snapshots"), "{e}");
+}
