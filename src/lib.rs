@@ -4,5 +4,6 @@
 
 pub mod generate;
 pub mod preview;
+pub mod sim;
 pub mod stochastic_wind;
 pub mod timeline;

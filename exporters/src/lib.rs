@@ -6,10 +6,12 @@
 //! [`FrameWriter`] that takes one frame at a time, so memory does not grow
 //! with the number of frames.
 
+pub mod abc;
 pub mod data;
 pub mod gltf;
 pub mod hair;
 pub mod obj;
+pub mod usd;
 
 use groom::{AttributeValues, Frame, Groom, Scope};
 use std::path::{Path, PathBuf};
@@ -41,10 +43,12 @@ impl ExportError {
 }
 
 /// The file extensions the exporters know, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &[
+    "hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd", "abc",
+];
 
 /// The extensions of formats that can hold animation.
-pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb"];
+pub const ANIMATED_EXTENSIONS: &[&str] = &["gltf", "glb", "usda", "usdc", "usd", "abc"];
 
 /// How animation is to be written.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,6 +88,9 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
         "data" => data::write(path, groom),
         "obj" => obj::write(path, groom),
         "gltf" | "glb" => gltf::write(path, groom),
+        "usda" => usd::write(path, groom, usd::Encoding::Text),
+        "usdc" | "usd" => usd::write(path, groom, usd::Encoding::Crate),
+        "abc" => abc::write(path, groom),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -97,10 +104,13 @@ pub fn animated(
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
-    // glTF keeps frame times in seconds; the frame rate and count are not needed up front.
-    let _ = options;
+    // glTF keeps frame times in seconds; USD writes time codes and Alembic
+    // its time sampling at `options.fps`.
     match extension_of(path).as_str() {
+        "usda" => usd::animated(path, groom, options, usd::Encoding::Text),
+        "usdc" | "usd" => usd::animated(path, groom, options, usd::Encoding::Crate),
         "gltf" | "glb" => gltf::animated(path, groom),
+        "abc" => abc::animated(path, groom, options),
         "hair" | "data" | "obj" => Err(ExportError::Unsupported {
             file: path.to_path_buf(),
             message: "this format holds no animation; write one frame with convert --frame".into(),

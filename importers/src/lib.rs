@@ -4,12 +4,14 @@
 //! Every reader checks counts and offsets against the bytes it has before it
 //! allocates or indexes, and reports what is wrong with the file and where.
 
+pub mod abc;
 mod binary;
 pub mod data;
 pub mod gltf;
 pub mod hair;
 pub mod mesh;
 pub mod obj;
+pub mod usd;
 
 use groom::Groom;
 use std::fmt;
@@ -77,7 +79,9 @@ impl ImportError {
 }
 
 /// The file extensions [`read`] knows, lower case, without the dot.
-pub const EXTENSIONS: &[&str] = &["hair", "data", "obj", "gltf", "glb"];
+pub const EXTENSIONS: &[&str] = &[
+    "hair", "data", "obj", "gltf", "glb", "usda", "usdc", "usd", "abc",
+];
 
 /// The lower-case extension of a path.
 pub fn extension_of(path: &Path) -> String {
@@ -95,6 +99,8 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
         "data" => data::read(path)?,
         "obj" => obj::read(path)?,
         "gltf" | "glb" => gltf::read(path)?,
+        "usda" | "usdc" | "usd" => usd::read(path)?,
+        "abc" => abc::read(path)?,
         _ => {
             return Err(ImportError::UnknownFormat {
                 file: path.to_path_buf(),

@@ -1,6 +1,8 @@
 //! The command line: argument parsing (clap) and one module per subcommand.
 //! Each subcommand only composes library functions.
 
+mod bake;
+mod bench;
 mod convert;
 mod generate;
 mod inspect;
@@ -28,6 +30,12 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Writes a procedural test groom.
     Generate(generate::GenerateArgs),
+    /// Runs a timeline of treatments and writes its exports.
+    Bake(bake::BakeArgs),
+    /// Checks a timeline (schema, files, values) without simulating.
+    Validate(bake::ValidateArgs),
+    /// Times the solver on a generated groom.
+    Bench(bench::BenchArgs),
     /// Draws a groom (or a sheet of its frames) to a PNG picture.
     Preview(preview::PreviewArgs),
 }
@@ -55,6 +63,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Generate(a) => generate::run(a),
+        Command::Bake(a) => bake::run_bake(a),
+        Command::Validate(a) => bake::run_validate(a),
+        Command::Bench(a) => bench::run(a),
         Command::Preview(a) => preview::run(a),
     }
 }

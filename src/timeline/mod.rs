@@ -2,8 +2,11 @@
 //! (this module), the stages that drive the simulation ([`stages`]) and the
 //! bake that runs them and writes the exports ([`bake`]).
 
+pub mod bake;
 pub mod motion;
+pub mod report;
 pub mod schema;
+pub mod stages;
 
 use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
 use serde_spanned::Spanned;

@@ -6,6 +6,11 @@
 
 mod util;
 
+mod alembic;
+mod bake;
+mod bench;
 mod cli;
 mod formats;
+mod golden;
 mod preview;
+mod usd;

@@ -71,13 +71,20 @@ impl TestDir {
     }
 }
 
-/// A file of `../shared/data/` (beside the repository).
+/// A file of `../shared/data/` (beside the repository, or beside one of its
+/// parent directories, as for a worktree).
 pub fn shared_data(name: &str) -> PathBuf {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(name);
-    assert!(path.exists(), "missing shared data file {}", path.display());
-    path
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = manifest
+        .ancestors()
+        .map(|dir| dir.join("shared/data").join(name))
+        .find(|p| p.exists());
+    path.unwrap_or_else(|| {
+        panic!(
+            "missing shared data file {name} beside {}",
+            manifest.display()
+        )
+    })
 }
 
 /// A file of this repository's `samples/`.

@@ -1,0 +1,224 @@
+#!/usr/bin/env python3
+"""Checks every .abc file of a directory with the Alembic library itself
+(alembic3d, the unofficial Python bindings of Alembic 1.8.12).
+
+Usage: check_abc.py DIR
+
+Every file must open; every Xform must give its matrix; every Curves object
+must be readable at every sample: nVertices positive and adding up to the
+points of P, the self bounds holding the points, widths one per point, per
+curve or one for all, sample times increasing. A sidecar `<file>.expect.json`
+(written by tests/integration/util.rs::hand_to_validators) says what the file
+must hold; its keys, all optional:
+
+  curves        total number of curves (all Curves objects, sample 0)
+  points        total number of points (sample 0)
+  samples       number of P samples (the largest over the Curves objects)
+  times         the times of those samples, in seconds
+  objects       object paths that must exist, e.g. ["/groom", "/groom/curves"]
+  basis         "linear" or a cubic basis name ("bezier", "bspline", ...)
+  width         scope of the widths: "vertex", "uniform" or "constant"
+  unreal_groom  true: Unreal's groom attributes must be in .arbGeomParams
+  kind          "abc" (ignored: says which validator the file is for)
+
+Exits 1 on any failure, and when the directory holds no .abc file.
+"""
+
+import json
+import math
+import sys
+from pathlib import Path
+
+from alembic3d import Abc, AbcGeom
+
+UNREAL_ATTRIBUTES = (
+    "groom_version_major",
+    "groom_version_minor",
+    "groom_guide",
+    "groom_group_id",
+)
+BASIS_NAMES = {
+    "kNoBasis": "linear",
+    "kBezierBasis": "bezier",
+    "kBsplineBasis": "bspline",
+    "kCatmullromBasis": "catmull_rom",
+    "kHermiteBasis": "hermite",
+    "kPowerBasis": "power",
+}
+SCOPE_NAMES = {
+    "kVertexScope": "vertex",
+    "kVaryingScope": "vertex",
+    "kUniformScope": "uniform",
+    "kConstantScope": "constant",
+}
+
+
+class Failures:
+    def __init__(self):
+        self.messages = []
+
+    def add(self, where, message):
+        self.messages.append(f"{where}: {message}")
+
+
+def walk(obj):
+    yield obj
+    for child in obj.children:
+        yield from walk(child)
+
+
+def check_curves(obj, file_name, failures, totals):
+    where = f"{file_name}:{obj.getFullName()}"
+    schema = AbcGeom.ICurves(obj, Abc.WrapExistingFlag.kWrapExisting).getSchema()
+    samples = schema.getNumSamples()
+    if samples < 1:
+        failures.add(where, "Curves with no samples")
+        return
+    sampling = schema.getTimeSampling()
+    times = [sampling.getSampleTime(i) for i in range(samples)]
+    if any(b <= a for a, b in zip(times, times[1:])):
+        failures.add(where, f"sample times do not increase: {times}")
+    widths_param = schema.getWidthsParam()
+    for index in range(samples):
+        sample = schema.getValue(Abc.ISampleSelector(index))
+        counts = list(sample.getCurvesNumVertices())
+        positions = sample.getPositions()
+        if any(c < 1 for c in counts):
+            failures.add(where, f"sample {index}: a curve with no vertices")
+        if sum(counts) != len(positions):
+            failures.add(
+                where,
+                f"sample {index}: nVertices add up to {sum(counts)} but P has {len(positions)} points",
+            )
+        bounds = sample.getSelfBounds()
+        low, high = bounds.min(), bounds.max()
+        outside = [
+            tuple(p)
+            for p in positions
+            if any(
+                p[axis] < low[axis] - 1e-4 * max(1.0, abs(p[axis]))
+                or p[axis] > high[axis] + 1e-4 * max(1.0, abs(p[axis]))
+                for axis in range(3)
+            )
+        ]
+        if outside:
+            failures.add(where, f"sample {index}: {len(outside)} points outside .selfBnds, e.g. {outside[0]}")
+        if widths_param.valid() and widths_param.getNumSamples() > 0:
+            widths = widths_param.getExpandedValue(Abc.ISampleSelector(index)).getVals()
+            if len(widths) not in (len(positions), len(counts), 1):
+                failures.add(
+                    where,
+                    f"sample {index}: {len(widths)} widths for {len(counts)} curves and {len(positions)} points",
+                )
+            if any(not math.isfinite(w) or w < 0 for w in widths):
+                failures.add(where, f"sample {index}: a width is negative or not finite")
+        if index == 0:
+            totals["curves"] += len(counts)
+            totals["points"] += len(positions)
+            totals["basis"].add(
+                "linear"
+                if str(sample.getType()) == "kLinear"
+                else BASIS_NAMES.get(str(sample.getBasis()), str(sample.getBasis()))
+            )
+    if samples > totals["samples"]:
+        totals["samples"] = samples
+        totals["times"] = times
+    if widths_param.valid():
+        totals["width"].add(SCOPE_NAMES.get(str(widths_param.getScope()), str(widths_param.getScope())))
+    arbitrary = schema.getArbGeomParams()
+    names = set()
+    if arbitrary.valid():
+        names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
+    totals["arbitrary"].append(names)
+
+
+def check_file(path, failures):
+    name = path.name
+    try:
+        archive = Abc.IArchive(str(path))
+    except Exception as error:  # the library raises plain RuntimeErrors
+        failures.add(name, f"alembic3d cannot open it: {error}")
+        return
+    totals = {
+        "curves": 0,
+        "points": 0,
+        "samples": 0,
+        "times": [],
+        "basis": set(),
+        "width": set(),
+        "arbitrary": [],
+    }
+    paths = set()
+    curves_objects = 0
+    try:
+        for obj in walk(archive.getTop()):
+            paths.add(obj.getFullName())
+            metadata = obj.getMetaData()
+            if AbcGeom.IXform.matches(metadata):
+                xform = AbcGeom.IXform(obj, Abc.WrapExistingFlag.kWrapExisting).getSchema()
+                for index in range(max(1, xform.getNumSamples())):
+                    xform.getValue(Abc.ISampleSelector(index)).getMatrix()
+            elif AbcGeom.ICurves.matches(metadata):
+                curves_objects += 1
+                check_curves(obj, name, failures, totals)
+    except Exception as error:
+        failures.add(name, f"alembic3d fails reading it: {error}")
+        return
+    if curves_objects == 0:
+        failures.add(name, "no Curves object")
+    expect_path = path.with_name(path.name + ".expect.json")
+    if not expect_path.exists():
+        print(f"ok   {name}: {totals['curves']} curves, {totals['points']} points, "
+              f"{totals['samples']} samples (no expectations)")
+        return
+    expect = json.loads(expect_path.read_text())
+    before = len(failures.messages)
+    for key in ("curves", "points", "samples"):
+        if key in expect and expect[key] != totals[key]:
+            failures.add(name, f"{key}: expected {expect[key]}, found {totals[key]}")
+    if "times" in expect:
+        found = totals["times"]
+        wanted = expect["times"]
+        if len(found) != len(wanted) or any(abs(a - b) > 1e-6 for a, b in zip(found, wanted)):
+            failures.add(name, f"times: expected {wanted}, found {found}")
+    for wanted in expect.get("objects", []):
+        if wanted not in paths:
+            failures.add(name, f"object {wanted} missing (found {sorted(paths)})")
+    if "basis" in expect and totals["basis"] != {expect["basis"]}:
+        failures.add(name, f"basis: expected {expect['basis']}, found {sorted(totals['basis'])}")
+    if "width" in expect and totals["width"] != {expect["width"]}:
+        failures.add(name, f"width: expected {expect['width']}, found {sorted(totals['width'])}")
+    if expect.get("unreal_groom"):
+        for names in totals["arbitrary"]:
+            missing = [a for a in UNREAL_ATTRIBUTES if a not in names]
+            if missing:
+                failures.add(name, f"Unreal groom attributes missing from .arbGeomParams: {missing}")
+    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom"}
+    unknown = set(expect) - known
+    if unknown:
+        failures.add(name, f"unknown expectation keys {sorted(unknown)}")
+    if len(failures.messages) == before:
+        print(f"ok   {name}: {totals['curves']} curves, {totals['points']} points, "
+              f"{totals['samples']} samples, as expected")
+
+
+def main():
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    directory = Path(sys.argv[1])
+    files = sorted(directory.rglob("*.abc"))
+    if not files:
+        print(f"check_abc: no .abc file in {directory}", file=sys.stderr)
+        return 1
+    failures = Failures()
+    for path in files:
+        check_file(path, failures)
+    for message in failures.messages:
+        print(f"FAIL {message}")
+    print(f"check_abc: {len(files)} files, {len(failures.messages)} failures")
+    return 1 if failures.messages else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

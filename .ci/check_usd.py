@@ -1,0 +1,202 @@
+#!/usr/bin/env python3
+"""Checks every USD file the tests exported with usd-core, the reference
+implementation.
+
+usage: check_usd.py DIR
+
+For each `.usda`/`.usdc`/`.usd` in DIR: opens it with `Usd.Stage.Open`,
+checks prim types, curve and point counts (at the default time and at every
+time sample), widths and primvar sizes against their interpolation
+(`ComputeInterpolationForSize`), the authored extent against the one usd-core
+computes, the time-code range, and the expectations the test wrote beside
+the file in `<file>.expect.json` (keys: curves, points, first_point,
+meters_per_unit, up_axis, basis, time_samples, start_time_code,
+end_time_code, time_codes_per_second, widths, primvars, and sample_points:
+`[time code, point index, [x, y, z]]` items checked in the first curves prim). Exits 1 on any failure or when DIR holds no USD file.
+"""
+import json
+import math
+import sys
+from pathlib import Path
+
+from pxr import Gf, Sdf, Usd, UsdGeom
+
+EXTENSIONS = {".usda", ".usdc", ".usd"}
+KNOWN_TYPES = {"Xform", "Scope", "BasisCurves"}
+
+
+def close(a, b, tolerance=1e-5):
+    a, b = list(a), list(b)
+    return len(a) == len(b) and all(
+        math.isclose(x, y, rel_tol=tolerance, abs_tol=tolerance) for x, y in zip(a, b))
+
+
+def fits(curves, size, interpolation):
+    """Whether `size` values fit `interpolation` on these curves. For linear
+    curves vertex and varying have the same size, so the one usd-core's
+    ComputeInterpolationForSize names first may be either."""
+    time = Usd.TimeCode.Default()
+    if not curves.ComputeInterpolationForSize(size, time):
+        return False
+    expected = {
+        "constant": 1,
+        "uniform": curves.ComputeUniformDataSize(time),
+        "varying": curves.ComputeVaryingDataSize(time),
+        "vertex": curves.ComputeVertexDataSize(time),
+    }.get(interpolation)
+    return expected == size
+
+
+def check_file(path):
+    """Returns the list of problems of one file."""
+    problems = []
+    fail = problems.append
+    sidecar = Path(str(path) + ".expect.json")
+    if not sidecar.exists():
+        return [f"no expectations file {sidecar.name}"]
+    expect = json.loads(sidecar.read_text())
+    stage = Usd.Stage.Open(str(path))
+    if stage is None:
+        return ["usd-core cannot open it"]
+
+    default = stage.GetDefaultPrim()
+    if not default or default.GetTypeName() != "Xform":
+        fail("the default prim is not an Xform")
+    curves_prims = []
+    for prim in stage.Traverse():
+        if prim.GetTypeName() not in KNOWN_TYPES:
+            fail(f"{prim.GetPath()}: unexpected prim type '{prim.GetTypeName()}'")
+        if prim.IsA(UsdGeom.BasisCurves):
+            curves_prims.append(UsdGeom.BasisCurves(prim))
+    if not curves_prims:
+        return problems + ["no BasisCurves prim"]
+
+    if "meters_per_unit" in expect and not close(
+            [UsdGeom.GetStageMetersPerUnit(stage)], [expect["meters_per_unit"]], 1e-12):
+        fail(f"metersPerUnit {UsdGeom.GetStageMetersPerUnit(stage)} != {expect['meters_per_unit']}")
+    if "up_axis" in expect and UsdGeom.GetStageUpAxis(stage) != expect["up_axis"]:
+        fail(f"upAxis {UsdGeom.GetStageUpAxis(stage)} != {expect['up_axis']}")
+
+    start, end = stage.GetStartTimeCode(), stage.GetEndTimeCode()
+    for key, actual in (("start_time_code", start), ("end_time_code", end),
+                        ("time_codes_per_second", stage.GetTimeCodesPerSecond())):
+        if key in expect and not close([actual], [expect[key]], 1e-12):
+            fail(f"{key} {actual} != {expect[key]}")
+
+    total_curves = total_points = 0
+    first_point = None
+    all_samples = None
+    for curves in curves_prims:
+        prim_path = curves.GetPath()
+        counts = curves.GetCurveVertexCountsAttr().Get()
+        points_attribute = curves.GetPointsAttr()
+        points = points_attribute.Get()
+        if counts is None or points is None:
+            fail(f"{prim_path}: no curveVertexCounts or points")
+            continue
+        total_curves += len(counts)
+        total_points += len(points)
+        if sum(counts) != len(points):
+            fail(f"{prim_path}: counts add up to {sum(counts)}, {len(points)} points")
+        world = UsdGeom.Xformable(curves).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+        if first_point is None and len(points):
+            first_point = world.Transform(Gf.Vec3d(points[0]))
+
+        times = points_attribute.GetTimeSamples()
+        if times:
+            if times[0] < start or times[-1] > end:
+                fail(f"{prim_path}: samples {times[0]}..{times[-1]} outside {start}..{end}")
+            samples = {}
+            for t in times:
+                sample = points_attribute.Get(t)
+                if len(sample) != len(points):
+                    fail(f"{prim_path}: {len(sample)} points at time {t}, {len(points)} at rest")
+                samples[t] = [world.Transform(Gf.Vec3d(p)) for p in sample]
+            all_samples = all_samples or samples
+
+        checked_times = [Usd.TimeCode.Default()] + [Usd.TimeCode(t) for t in times]
+        for time in checked_times:
+            authored = curves.GetExtentAttr().Get(time)
+            computed = UsdGeom.Boundable.ComputeExtentFromPlugins(curves, time)
+            if authored is None or computed is None:
+                fail(f"{prim_path}: no extent at {time}")
+            elif not all(close(a, c, 1e-4) for a, c in zip(authored, computed)):
+                fail(f"{prim_path}: extent {list(authored)} != computed {list(computed)} at {time}")
+
+        curve_type = curves.GetTypeAttr().Get()
+        basis = "linear" if curve_type == "linear" else curves.GetBasisAttr().Get()
+        if "basis" in expect and basis != expect["basis"]:
+            fail(f"{prim_path}: basis {basis} != {expect['basis']}")
+
+        widths = curves.GetWidthsAttr().Get()
+        if widths is not None:
+            interpolation = curves.GetWidthsInterpolation()
+            if not fits(curves, len(widths), interpolation):
+                fail(f"{prim_path}: {len(widths)} widths do not fit {interpolation} interpolation")
+            if "widths" in expect and interpolation != expect["widths"]:
+                fail(f"{prim_path}: widths interpolation {interpolation} != {expect['widths']}")
+        elif "widths" in expect:
+            fail(f"{prim_path}: no widths")
+
+        primvars = {pv.GetPrimvarName(): pv for pv in UsdGeom.PrimvarsAPI(curves).GetPrimvars()
+                    if pv.HasAuthoredValue()}
+        for name, primvar in primvars.items():
+            values = primvar.ComputeFlattened()
+            size = len(values) // max(primvar.GetElementSize(), 1)
+            if not fits(curves, size, primvar.GetInterpolation()):
+                fail(f"{prim_path}: primvar {name} has {size} values, "
+                     f"not a {primvar.GetInterpolation()} size")
+        for name, interpolation in expect.get("primvars", {}).items():
+            if name not in primvars:
+                fail(f"{prim_path}: no primvar {name}")
+            elif primvars[name].GetInterpolation() != interpolation:
+                fail(f"{prim_path}: primvar {name} is {primvars[name].GetInterpolation()}, "
+                     f"expected {interpolation}")
+
+    if "curves" in expect and total_curves != expect["curves"]:
+        fail(f"{total_curves} curves, expected {expect['curves']}")
+    if "points" in expect and total_points != expect["points"]:
+        fail(f"{total_points} points, expected {expect['points']}")
+    if "first_point" in expect and (first_point is None or not close(first_point, expect["first_point"])):
+        fail(f"first point {first_point} != {expect['first_point']}")
+    sample_count = len(all_samples or {})
+    if "time_samples" in expect and sample_count != expect["time_samples"]:
+        fail(f"{sample_count} time samples, expected {expect['time_samples']}")
+    for time, index, wanted in expect.get("sample_points", []):
+        sample = (all_samples or {}).get(time)
+        if sample is None:
+            fail(f"no time sample at {time}")
+        elif index >= len(sample) or not close(sample[index], wanted):
+            got = list(sample[index]) if index < len(sample) else None
+            fail(f"point {index} at time {time} is {got}, expected {wanted}")
+    return problems
+
+
+def main():
+    if len(sys.argv) != 2:
+        print(__doc__)
+        return 2
+    directory = Path(sys.argv[1])
+    files = sorted(p for p in directory.iterdir() if p.suffix.lower() in EXTENSIONS) \
+        if directory.is_dir() else []
+    if not files:
+        print(f"check_usd: no USD file in {directory}")
+        return 1
+    failed = 0
+    for path in files:
+        try:
+            problems = check_file(path)
+        except Exception as error:  # usd-core raises on unreadable files
+            problems = [f"{type(error).__name__}: {error}"]
+        if problems:
+            failed += 1
+            for problem in problems:
+                print(f"FAIL {path.name}: {problem}")
+        else:
+            print(f"ok   {path.name}")
+    print(f"check_usd: {len(files) - failed} of {len(files)} USD files pass")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,328 @@
+//! USD export: one `BasisCurves` prim under an `Xform` root, written as text
+//! (`.usda`, [`usda`]) or as a binary crate file (`.usdc`/`.usd`,
+//! [`crate_writer`]).
+//!
+//! Both writers take the same [`CurvesScene`]: the stage metadata and every
+//! property of the curves prim, sorted by name so the bytes never depend on
+//! the order attributes were added in.
+
+mod crate_writer;
+mod usda;
+
+use crate::{AnimationOptions, ExportError, FrameWriter};
+use groom::{AttributeValues, CurveBasis, Frame, Groom, Scope};
+use std::path::Path;
+
+/// Name of the root `Xform` (the stage's `defaultPrim`).
+pub(crate) const ROOT_PRIM: &str = "Groom";
+/// Name of the `BasisCurves` prim under the root.
+pub(crate) const CURVES_PRIM: &str = "Strands";
+
+/// Frames per second used when a groom with frames is written through
+/// [`crate::write`], which has no [`AnimationOptions`].
+const DEFAULT_FPS: f64 = 24.0;
+
+/// USD's two encodings: `.usda` is text, `.usdc` and `.usd` are crate files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Encoding {
+    Text,
+    Crate,
+}
+
+/// Writes a static groom, or an animated one when it has frames.
+pub fn write(path: &Path, groom: &Groom, encoding: Encoding) -> Result<(), ExportError> {
+    if groom.frames.is_empty() {
+        let scene = CurvesScene::new(path, groom, None)?;
+        return match encoding {
+            Encoding::Text => usda::write_static(path, &scene),
+            Encoding::Crate => crate_writer::write_static(path, &scene),
+        };
+    }
+    let options = AnimationOptions {
+        fps: DEFAULT_FPS,
+        frame_count: groom.frames.len(),
+    };
+    let mut writer = animated(path, groom, options, encoding)?;
+    for frame in &groom.frames {
+        writer.write_frame(frame)?;
+    }
+    writer.finish()
+}
+
+/// Starts an animated export; frames are streamed to the file.
+pub fn animated(
+    path: &Path,
+    groom: &Groom,
+    options: AnimationOptions,
+    encoding: Encoding,
+) -> Result<Box<dyn FrameWriter>, ExportError> {
+    if !(options.fps.is_finite() && options.fps > 0.0) {
+        return Err(ExportError::Invalid {
+            file: path.to_path_buf(),
+            message: format!("frames per second must be positive, not {}", options.fps),
+        });
+    }
+    let scene = CurvesScene::new(path, groom, Some(options.fps))?;
+    match encoding {
+        Encoding::Text => Ok(Box::new(usda::AnimatedUsda::create(path, scene)?)),
+        Encoding::Crate => Ok(Box::new(crate_writer::AnimatedCrate::create(path, scene)?)),
+    }
+}
+
+/// The value of one property, in the element type USD stores.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum PropertyValue {
+    Token(&'static str),
+    Ints(Vec<i32>),
+    Floats(Vec<f32>),
+    Float2s(Vec<[f32; 2]>),
+    Float3s(Vec<[f32; 3]>),
+}
+
+/// One attribute of the curves prim.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Property {
+    /// Full name, e.g. `points` or `primvars:wetness`.
+    pub name: String,
+    /// USD type name, e.g. `point3f[]`, `texCoord2f[]`, `token`.
+    pub type_name: &'static str,
+    pub uniform: bool,
+    pub interpolation: Option<&'static str>,
+    pub value: PropertyValue,
+}
+
+/// Stage time metadata of an animated export.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Timing {
+    pub fps: f64,
+}
+
+/// Everything both writers put in the file apart from the time samples.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CurvesScene {
+    pub meters_per_unit: f64,
+    pub up_axis: &'static str,
+    pub timing: Option<Timing>,
+    /// Sorted by name; includes `points` and `extent` of the rest pose.
+    pub properties: Vec<Property>,
+    /// Vertex count of the groom (every frame must have as many points).
+    pub vertex_count: usize,
+    /// Half the largest width: the extent grows by it, as USD's own
+    /// `UsdGeomCurves::ComputeExtent` does.
+    pub extent_padding: f32,
+}
+
+impl CurvesScene {
+    pub fn new(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesScene, ExportError> {
+        let invalid = |message: String| ExportError::Invalid {
+            file: path.to_path_buf(),
+            message,
+        };
+        let (curve_type, basis) = match groom.basis {
+            CurveBasis::Linear => ("linear", None),
+            CurveBasis::Bezier => ("cubic", Some("bezier")),
+            CurveBasis::Bspline => ("cubic", Some("bspline")),
+            CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+            other => {
+                return Err(ExportError::Unsupported {
+                    file: path.to_path_buf(),
+                    message: format!("USD BasisCurves have no {} basis", other.name()),
+                })
+            }
+        };
+        let counts = groom
+            .strand_vertex_counts
+            .iter()
+            .map(|&c| i32::try_from(c).map_err(|_| invalid(format!("strand of {c} points"))))
+            .collect::<Result<Vec<i32>, ExportError>>()?;
+
+        let mut properties = vec![
+            token_property("type", curve_type),
+            token_property("wrap", "nonperiodic"),
+            Property {
+                name: "curveVertexCounts".into(),
+                type_name: "int[]",
+                uniform: false,
+                interpolation: None,
+                value: PropertyValue::Ints(counts),
+            },
+            Property {
+                name: "points".into(),
+                type_name: "point3f[]",
+                uniform: false,
+                interpolation: None,
+                value: PropertyValue::Float3s(groom.points.clone()),
+            },
+        ];
+        if let Some(basis) = basis {
+            properties.push(token_property("basis", basis));
+        }
+        let mut max_width = 0.0f32;
+        for attribute in &groom.attributes {
+            let interpolation = match attribute.scope {
+                Scope::Vertex => "vertex",
+                Scope::Strand => "uniform",
+            };
+            let (name, type_name, value) = match (&attribute.name[..], &attribute.values) {
+                ("width", AttributeValues::Float(v)) => {
+                    max_width = v.iter().fold(max_width, |m, &w| m.max(w.abs()));
+                    (
+                        "widths".to_string(),
+                        "float[]",
+                        PropertyValue::Floats(v.clone()),
+                    )
+                }
+                ("root_uv", AttributeValues::Vec2(v)) => (
+                    "primvars:st".to_string(),
+                    "texCoord2f[]",
+                    PropertyValue::Float2s(v.clone()),
+                ),
+                (name, values) => {
+                    let name = format!("primvars:{}", identifier(name));
+                    match values {
+                        AttributeValues::Float(v) => {
+                            (name, "float[]", PropertyValue::Floats(v.clone()))
+                        }
+                        AttributeValues::Vec2(v) => {
+                            (name, "float2[]", PropertyValue::Float2s(v.clone()))
+                        }
+                        AttributeValues::Vec3(v) => {
+                            (name, "float3[]", PropertyValue::Float3s(v.clone()))
+                        }
+                        AttributeValues::Int(v) => (name, "int[]", PropertyValue::Ints(v.clone())),
+                    }
+                }
+            };
+            let name = unique_name(&properties, name);
+            properties.push(Property {
+                name,
+                type_name,
+                uniform: false,
+                interpolation: Some(interpolation),
+                value,
+            });
+        }
+        let extent_padding = max_width * 0.5;
+        properties.push(Property {
+            name: "extent".into(),
+            type_name: "float3[]",
+            uniform: false,
+            interpolation: None,
+            value: PropertyValue::Float3s(extent_of(&groom.points, extent_padding).to_vec()),
+        });
+        properties.sort_by(|a, b| a.name.cmp(&b.name));
+
+        Ok(CurvesScene {
+            meters_per_unit: groom.units.meters_per_unit,
+            up_axis: groom.up_axis.name(),
+            timing: fps.map(|fps| Timing { fps }),
+            properties,
+            vertex_count: groom.points.len(),
+            extent_padding,
+        })
+    }
+
+    /// Drops the property values once a writer has written them, keeping
+    /// names, types and tokens: an animated export then holds no copy of
+    /// the groom's arrays while frames stream.
+    pub fn forget_values(&mut self) {
+        for property in &mut self.properties {
+            match &mut property.value {
+                PropertyValue::Token(_) => {}
+                PropertyValue::Ints(v) => *v = Vec::new(),
+                PropertyValue::Floats(v) => *v = Vec::new(),
+                PropertyValue::Float2s(v) => *v = Vec::new(),
+                PropertyValue::Float3s(v) => *v = Vec::new(),
+            }
+        }
+    }
+
+    /// The extent of one pose.
+    pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
+        extent_of(points, self.extent_padding)
+    }
+
+    /// Checks a streamed frame against the groom's topology.
+    pub fn check_frame(&self, path: &Path, frame: &Frame) -> Result<(), ExportError> {
+        if frame.points.len() != self.vertex_count {
+            return Err(ExportError::Invalid {
+                file: path.to_path_buf(),
+                message: format!(
+                    "frame at {} s has {} points, the groom has {}",
+                    frame.time,
+                    frame.points.len(),
+                    self.vertex_count
+                ),
+            });
+        }
+        if !frame.time.is_finite() || frame.points.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(ExportError::Invalid {
+                file: path.to_path_buf(),
+                message: format!("frame at {} s has a value that is not finite", frame.time),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The time code of a time in seconds. Codes within 1e-9 of a whole number
+/// are snapped to it, so `i / fps * fps` writes as `i`.
+pub(crate) fn time_code(time: f64, fps: f64) -> f64 {
+    let code = time * fps;
+    let whole = code.round();
+    if (code - whole).abs() < 1e-9 {
+        whole
+    } else {
+        code
+    }
+}
+
+fn token_property(name: &str, token: &'static str) -> Property {
+    Property {
+        name: name.into(),
+        type_name: "token",
+        uniform: true,
+        interpolation: None,
+        value: PropertyValue::Token(token),
+    }
+}
+
+fn unique_name(properties: &[Property], name: String) -> String {
+    let taken = |n: &str| properties.iter().any(|p| p.name == n);
+    if !taken(&name) {
+        return name;
+    }
+    (1..)
+        .map(|i| format!("{name}_{i}"))
+        .find(|n| !taken(n))
+        .unwrap_or(name)
+}
+
+/// A valid USD identifier: letters, digits and `_`, not starting with a digit.
+fn identifier(name: &str) -> String {
+    let mut out: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, '_');
+    }
+    out
+}
+
+fn extent_of(points: &[[f32; 3]], padding: f32) -> [[f32; 3]; 2] {
+    let Some(first) = points.first() else {
+        return [[0.0; 3]; 2];
+    };
+    let (mut min, mut max) = (*first, *first);
+    for p in points {
+        for axis in 0..3 {
+            min[axis] = min[axis].min(p[axis]);
+            max[axis] = max[axis].max(p[axis]);
+        }
+    }
+    [min.map(|c| c - padding), max.map(|c| c + padding)]
+}
+
+#[cfg(test)]
+mod tests;

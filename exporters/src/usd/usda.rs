@@ -1,0 +1,236 @@
+//! `.usda` text writer.
+//!
+//! An animated export cannot write the text in file order as frames arrive
+//! (the stage header names the last time code), so everything after the
+//! header goes to a spill file beside the output: the static properties when
+//! the export starts, then the `points` samples frame by frame, then the
+//! extents. `finish` writes the header and copies the spill file after it.
+//! Memory stays at one frame plus one extent per frame.
+
+use super::{time_code, CurvesScene, Property, PropertyValue, CURVES_PRIM, ROOT_PRIM};
+use crate::{ExportError, FrameWriter};
+use groom::{AtomicFile, Frame};
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
+    let io_error = |e| ExportError::io(path, e);
+    let mut file = AtomicFile::create(path).map_err(io_error)?;
+    file.write_all(header(scene, None).as_bytes())
+        .and_then(|()| write_properties(&mut file, scene))
+        .and_then(|()| file.write_all(CLOSING))
+        .map_err(io_error)?;
+    file.commit().map_err(io_error)
+}
+
+/// Closes the curves prim and the root.
+const CLOSING: &[u8] = b"    }\n}\n";
+
+/// Stage metadata and the openings of the root and curves prims; `range`
+/// is the first and last time code of an animated export.
+fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
+    let mut header = String::from("#usda 1.0\n(\n");
+    let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
+    header.push_str("    doc = \"Written by groombake\"\n");
+    if let (Some(timing), Some((start, end))) = (scene.timing, range) {
+        let _ = writeln!(header, "    endTimeCode = {end}");
+        let _ = writeln!(header, "    framesPerSecond = {}", timing.fps);
+        let _ = writeln!(header, "    metersPerUnit = {}", scene.meters_per_unit);
+        let _ = writeln!(header, "    startTimeCode = {start}");
+        let _ = writeln!(header, "    timeCodesPerSecond = {}", timing.fps);
+    } else {
+        let _ = writeln!(header, "    metersPerUnit = {}", scene.meters_per_unit);
+    }
+    let _ = writeln!(header, "    upAxis = \"{}\"", scene.up_axis);
+    header.push_str(")\n\n");
+    let _ = writeln!(header, "def Xform \"{ROOT_PRIM}\"\n{{");
+    let _ = writeln!(header, "    def BasisCurves \"{CURVES_PRIM}\"\n    {{");
+    header
+}
+
+fn write_properties(out: &mut dyn Write, scene: &CurvesScene) -> io::Result<()> {
+    let mut text = String::new();
+    for property in &scene.properties {
+        text.clear();
+        write_property(&mut text, property);
+        out.write_all(text.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn write_property(text: &mut String, property: &Property) {
+    text.push_str("        ");
+    if property.uniform {
+        text.push_str("uniform ");
+    }
+    let _ = write!(text, "{} {} = ", property.type_name, property.name);
+    match &property.value {
+        PropertyValue::Token(token) => {
+            let _ = write!(text, "\"{token}\"");
+        }
+        PropertyValue::Ints(values) => write_list(text, values, |t, v| {
+            let _ = write!(t, "{v}");
+        }),
+        PropertyValue::Floats(values) => write_list(text, values, |t, v| {
+            let _ = write!(t, "{v}");
+        }),
+        PropertyValue::Float2s(values) => write_list(text, values, |t, v| {
+            let _ = write!(t, "({}, {})", v[0], v[1]);
+        }),
+        PropertyValue::Float3s(values) => write_float3s(text, values),
+    }
+    if let Some(interpolation) = property.interpolation {
+        let _ = write!(
+            text,
+            " (\n            interpolation = \"{interpolation}\"\n        )"
+        );
+    }
+    text.push('\n');
+}
+
+fn write_float3s(text: &mut String, values: &[[f32; 3]]) {
+    write_list(text, values, |t, v| {
+        let _ = write!(t, "({}, {}, {})", v[0], v[1], v[2]);
+    });
+}
+
+fn write_list<T>(text: &mut String, values: &[T], mut item: impl FnMut(&mut String, &T)) {
+    text.push('[');
+    for (index, value) in values.iter().enumerate() {
+        if index > 0 {
+            text.push_str(", ");
+        }
+        item(text, value);
+    }
+    text.push(']');
+}
+
+/// A temporary file beside the output, removed when dropped.
+struct SpillFile {
+    path: PathBuf,
+    writer: Option<BufWriter<File>>,
+}
+
+impl SpillFile {
+    fn create(destination: &Path) -> io::Result<SpillFile> {
+        let mut name = std::ffi::OsString::from(".");
+        name.push(destination.file_name().unwrap_or_default());
+        name.push(format!(".{}.frames.tmp", std::process::id()));
+        let path = destination.with_file_name(name);
+        let file = File::create(&path)?;
+        Ok(SpillFile {
+            path,
+            writer: Some(BufWriter::new(file)),
+        })
+    }
+
+    fn writer(&mut self) -> io::Result<&mut BufWriter<File>> {
+        self.writer
+            .as_mut()
+            .ok_or_else(|| io::Error::other("spill file already closed"))
+    }
+
+    /// Flushes and reopens the file for reading from its start.
+    fn into_reader(mut self) -> io::Result<(File, SpillFile)> {
+        if let Some(writer) = self.writer.take() {
+            writer.into_inner().map_err(|e| e.into_error())?;
+        }
+        let file = File::open(&self.path)?;
+        Ok((file, self))
+    }
+}
+
+impl Drop for SpillFile {
+    fn drop(&mut self) {
+        self.writer = None;
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Streams the frames of an animated `.usda` export.
+pub(super) struct AnimatedUsda {
+    path: PathBuf,
+    scene: CurvesScene,
+    spill: SpillFile,
+    extents: Vec<(f64, [[f32; 3]; 2])>,
+    line: String,
+}
+
+impl AnimatedUsda {
+    pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedUsda, ExportError> {
+        let io_error = |e| ExportError::io(path, e);
+        let mut spill = SpillFile::create(path).map_err(io_error)?;
+        let writer = spill.writer().map_err(io_error)?;
+        write_properties(writer, &scene)
+            .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
+            .map_err(io_error)?;
+        // The static values are in the spill file now; only the metadata
+        // is needed until the end.
+        scene.forget_values();
+        Ok(AnimatedUsda {
+            path: path.to_path_buf(),
+            scene,
+            spill,
+            extents: Vec::new(),
+            line: String::new(),
+        })
+    }
+}
+
+impl FrameWriter for AnimatedUsda {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), ExportError> {
+        self.scene.check_frame(&self.path, frame)?;
+        let fps = self.scene.timing.map_or(1.0, |t| t.fps);
+        let code = time_code(frame.time, fps);
+        if self.extents.last().is_some_and(|(last, _)| code <= *last) {
+            return Err(ExportError::Invalid {
+                file: self.path.clone(),
+                message: format!("frame time codes must increase (time code {code})"),
+            });
+        }
+        self.extents.push((code, self.scene.extent(&frame.points)));
+        self.line.clear();
+        let _ = write!(self.line, "            {code}: ");
+        write_float3s(&mut self.line, &frame.points);
+        self.line.push_str(",\n");
+        let line = std::mem::take(&mut self.line);
+        let result = self
+            .spill
+            .writer()
+            .and_then(|w| w.write_all(line.as_bytes()));
+        self.line = line;
+        result.map_err(|e| ExportError::io(&self.path, e))
+    }
+
+    fn finish(self: Box<Self>) -> Result<(), ExportError> {
+        let mut this = *self;
+        let io_error = |e| ExportError::io(&this.path, e);
+        let (Some(&(start, _)), Some(&(end, _))) = (this.extents.first(), this.extents.last())
+        else {
+            return Err(ExportError::Invalid {
+                file: this.path.clone(),
+                message: "an animated export needs at least one frame".into(),
+            });
+        };
+        let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
+        for (code, extent) in &this.extents {
+            let _ = write!(tail, "            {code}: ");
+            write_float3s(&mut tail, extent);
+            tail.push_str(",\n");
+        }
+        tail.push_str("        }\n");
+        let spill_writer = this.spill.writer().map_err(io_error)?;
+        spill_writer
+            .write_all(tail.as_bytes())
+            .and_then(|()| spill_writer.write_all(CLOSING))
+            .map_err(io_error)?;
+        let (mut body, _spill) = this.spill.into_reader().map_err(io_error)?;
+        let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
+        file.write_all(header(&this.scene, Some((start, end))).as_bytes())
+            .and_then(|()| io::copy(&mut body, &mut file).map(|_| ()))
+            .map_err(io_error)?;
+        file.commit().map_err(io_error)
+    }
+}

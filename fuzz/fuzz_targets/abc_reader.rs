@@ -1,0 +1,10 @@
+//! The Alembic reader on arbitrary bytes: it must return a groom or an
+//! error, never panic, hang or allocate without bound.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = importers::abc::parse(Path::new("fuzz.abc"), data);
+});

@@ -1,0 +1,733 @@
+//! From the object tree to a groom: every Curves object, placed by the
+//! transforms above it, with its samples, widths, uvs and arbitrary
+//! geometry parameters.
+
+use super::archive::{Archive, Kind, Object, Pod, Property};
+use super::ogawa::Fault;
+use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope};
+
+type Matrix = [[f64; 4]; 4];
+
+const IDENTITY: Matrix = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+/// Row-vector product `a * b` (Imath's convention: points are rows).
+fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
+    let mut out = [[0.0; 4]; 4];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, cell) in row.iter_mut().enumerate() {
+            *cell = (0..4).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    out
+}
+
+fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
+    let [x, y, z] = p.map(f64::from);
+    let mut out = [0f32; 3];
+    for (j, c) in out.iter_mut().enumerate() {
+        *c = (x * m[0][j] + y * m[1][j] + z * m[2][j] + m[3][j]) as f32;
+    }
+    out
+}
+
+/// Imath's `setAxisAngle` for row vectors; `degrees` as Alembic stores them.
+fn axis_angle(axis: [f64; 3], degrees: f64) -> Matrix {
+    let length = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    if length == 0.0 {
+        return IDENTITY;
+    }
+    let [u0, u1, u2] = axis.map(|a| a / length);
+    let (s, c) = degrees.to_radians().sin_cos();
+    let t = 1.0 - c;
+    [
+        [
+            u0 * u0 * t + c,
+            u0 * u1 * t + u2 * s,
+            u0 * u2 * t - u1 * s,
+            0.0,
+        ],
+        [
+            u0 * u1 * t - u2 * s,
+            u1 * u1 * t + c,
+            u1 * u2 * t + u0 * s,
+            0.0,
+        ],
+        [
+            u0 * u2 * t + u1 * s,
+            u1 * u2 * t - u0 * s,
+            u2 * u2 * t + c,
+            0.0,
+        ],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+}
+
+/// Converts stored values of any numeric type to f64, component by component.
+fn components(pod: Pod, bytes: &[u8], path: &str) -> Result<Vec<f64>, Fault> {
+    let size = pod
+        .size()
+        .ok_or_else(|| Fault::path(path, "string values where numbers were expected"))?;
+    if !bytes.len().is_multiple_of(size) {
+        return Err(Fault::path(
+            path,
+            format!(
+                "{} bytes is not a whole number of {size}-byte values",
+                bytes.len()
+            ),
+        ));
+    }
+    let values = bytes.chunks_exact(size).map(|c| {
+        let mut word = [0u8; 8];
+        word[..size].copy_from_slice(c);
+        let raw = u64::from_le_bytes(word);
+        match pod {
+            Pod::Bool | Pod::U8 => raw as u8 as f64,
+            Pod::I8 => raw as u8 as i8 as f64,
+            Pod::U16 => raw as u16 as f64,
+            Pod::I16 => raw as u16 as i16 as f64,
+            Pod::U32 => raw as u32 as f64,
+            Pod::I32 => raw as u32 as i32 as f64,
+            Pod::U64 => raw as f64,
+            Pod::I64 => raw as i64 as f64,
+            Pod::F16 => f64::from(half_to_f32(raw as u16)),
+            Pod::F32 => f64::from(f32::from_bits(raw as u32)),
+            Pod::F64 => f64::from_bits(raw),
+            Pod::String | Pod::WString => 0.0,
+        }
+    });
+    Ok(values.collect())
+}
+
+fn half_to_f32(bits: u16) -> f32 {
+    let sign = if bits & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exponent = i32::from((bits >> 10) & 0x1f);
+    let mantissa = f32::from(bits & 0x3ff);
+    match exponent {
+        0 => sign * mantissa * 2f32.powi(-24),
+        31 if mantissa == 0.0 => sign * f32::INFINITY,
+        31 => f32::NAN,
+        _ => sign * (1.0 + mantissa / 1024.0) * 2f32.powi(exponent - 15),
+    }
+}
+
+/// Limits the bytes decoded from samples: shared blocks could otherwise make
+/// a small file expand without bound.
+struct Budget {
+    remaining: u64,
+}
+
+impl Budget {
+    fn take(&mut self, bytes: usize, path: &str) -> Result<(), Fault> {
+        let bytes = bytes as u64;
+        if bytes > self.remaining {
+            return Err(Fault::path(
+                path,
+                "the samples decode to far more data than the file holds (too many shared samples)",
+            ));
+        }
+        self.remaining -= bytes;
+        Ok(())
+    }
+}
+
+/// One Curves object, read and placed.
+struct Part {
+    path: String,
+    counts: Vec<u32>,
+    /// Sample 0 first; more for an animated object.
+    samples: Vec<Vec<[f32; 3]>>,
+    times: Vec<f64>,
+    basis: CurveBasis,
+    attributes: Vec<Attribute>,
+}
+
+struct SceneReader<'r, 'a> {
+    archive: &'r Archive<'a>,
+    budget: Budget,
+    notes: Vec<String>,
+}
+
+/// Reads every Curves object of the archive into one groom.
+pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
+    let mut reader = SceneReader {
+        archive,
+        budget: Budget {
+            remaining: archive
+                .ogawa
+                .size()
+                .saturating_mul(64)
+                .saturating_add(64 << 20),
+        },
+        notes: Vec::new(),
+    };
+    let mut parts = Vec::new();
+    reader.walk(&archive.top, &IDENTITY, &mut parts)?;
+    let mut groom = merge(parts, &mut reader.budget)?;
+    groom.provenance.format = "abc".into();
+    let mut info = archive
+        .metadata
+        .get("_ai_Application")
+        .unwrap_or_default()
+        .to_string();
+    for note in &reader.notes {
+        if !info.is_empty() {
+            info.push_str("; ");
+        }
+        info.push_str(note);
+    }
+    groom.provenance.info = info;
+    Ok(groom)
+}
+
+fn schema(object: &Object) -> &str {
+    object.metadata.get("schema").unwrap_or_default()
+}
+
+impl SceneReader<'_, '_> {
+    fn walk(
+        &mut self,
+        object: &Object,
+        parent: &Matrix,
+        parts: &mut Vec<Part>,
+    ) -> Result<(), Fault> {
+        let mut world = *parent;
+        let kind = schema(object);
+        if kind.starts_with("AbcGeom_Xform") {
+            let (local, inherits) = self.xform(object)?;
+            world = if inherits {
+                multiply(&local, parent)
+            } else {
+                local
+            };
+        } else if kind.starts_with("AbcGeom_Curve") {
+            parts.push(self.curves(object, &world)?);
+        }
+        for child in &object.children {
+            self.walk(child, &world, parts)?;
+        }
+        Ok(())
+    }
+
+    fn sample_values(&mut self, property: &Property, index: u32) -> Result<Vec<f64>, Fault> {
+        if property.kind == Kind::Compound {
+            return Err(Fault::path(
+                &property.path,
+                "expected values, found a compound",
+            ));
+        }
+        let bytes = self.archive.sample(property, index)?;
+        // Each sample costs at least a little, so empty ones cannot repeat
+        // without bound either.
+        self.budget.take(
+            bytes.len().saturating_mul(2).saturating_add(64),
+            &property.path,
+        )?;
+        let values = components(property.pod, bytes, &property.path)?;
+        let extent = usize::from(property.extent).max(1);
+        if !values.len().is_multiple_of(extent) {
+            return Err(Fault::path(
+                &property.path,
+                format!(
+                    "{} values is not a whole number of {extent}-component elements",
+                    values.len()
+                ),
+            ));
+        }
+        Ok(values)
+    }
+
+    /// The points of sample `index` of `P`; 32-bit floats are read as they
+    /// are, other types through [`components`].
+    fn points(&mut self, property: &Property, index: u32) -> Result<Vec<[f32; 3]>, Fault> {
+        let bytes = self.archive.sample(property, index)?;
+        self.budget
+            .take(bytes.len().saturating_add(64), &property.path)?;
+        if property.pod == Pod::F32 {
+            if !bytes.len().is_multiple_of(12) {
+                return Err(Fault::path(
+                    &property.path,
+                    format!("{} bytes is not a whole number of points", bytes.len()),
+                ));
+            }
+            let f = |c: &[u8]| f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+            return Ok(bytes
+                .chunks_exact(12)
+                .map(|c| [f(&c[0..4]), f(&c[4..8]), f(&c[8..12])])
+                .collect());
+        }
+        let values = self.sample_values(property, index)?;
+        if !values.len().is_multiple_of(3) {
+            return Err(Fault::path(
+                &property.path,
+                format!("{} values is not a whole number of points", values.len()),
+            ));
+        }
+        Ok(values
+            .chunks_exact(3)
+            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+            .collect())
+    }
+
+    /// The local matrix of an Xform (its first sample) and whether it
+    /// inherits its parent's.
+    fn xform(&mut self, object: &Object) -> Result<(Matrix, bool), Fault> {
+        let Some(xform) = object.property(".xform") else {
+            return Ok((IDENTITY, true));
+        };
+        let inherits = match xform.child(".inherits") {
+            Some(p) if p.sample_count > 0 => {
+                self.sample_values(p, 0)?.first().is_none_or(|&v| v != 0.0)
+            }
+            _ => true,
+        };
+        let Some(ops) = xform.child(".ops").filter(|p| p.sample_count > 0) else {
+            return Ok((IDENTITY, inherits));
+        };
+        let codes = self.sample_values(ops, 0)?;
+        let values = match xform.child(".vals").filter(|p| p.sample_count > 0) {
+            Some(vals) => self.sample_values(vals, 0)?,
+            None => Vec::new(),
+        };
+        let path = format!("{}/.xform", object.path);
+        let mut matrix = IDENTITY;
+        let mut next = 0usize;
+        for code in codes {
+            let kind = (code as u8) >> 4;
+            let channels = match kind {
+                0..=1 => 3,
+                2 => 4,
+                3 => 16,
+                4..=6 => 1,
+                _ => {
+                    return Err(Fault::path(
+                        &path,
+                        format!("unknown transform operation {kind}"),
+                    ))
+                }
+            };
+            let v = values.get(next..next + channels).ok_or_else(|| {
+                Fault::path(
+                    &path,
+                    format!(
+                        "the operations need more than the {} values stored",
+                        values.len()
+                    ),
+                )
+            })?;
+            next += channels;
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(Fault::path(&path, "a transform value is not finite"));
+            }
+            let op = match kind {
+                0 => {
+                    let mut m = IDENTITY;
+                    m[0][0] = v[0];
+                    m[1][1] = v[1];
+                    m[2][2] = v[2];
+                    m
+                }
+                1 => {
+                    let mut m = IDENTITY;
+                    m[3][0] = v[0];
+                    m[3][1] = v[1];
+                    m[3][2] = v[2];
+                    m
+                }
+                2 => axis_angle([v[0], v[1], v[2]], v[3]),
+                3 => {
+                    let mut m = IDENTITY;
+                    for (j, row) in m.iter_mut().enumerate() {
+                        for (k, cell) in row.iter_mut().enumerate() {
+                            *cell = v[4 * j + k];
+                        }
+                    }
+                    m
+                }
+                4 => axis_angle([1.0, 0.0, 0.0], v[0]),
+                5 => axis_angle([0.0, 1.0, 0.0], v[0]),
+                _ => axis_angle([0.0, 0.0, 1.0], v[0]),
+            };
+            // Each operation applies before the ones already accumulated.
+            matrix = multiply(&op, &matrix);
+        }
+        Ok((matrix, inherits))
+    }
+
+    fn curves(&mut self, object: &Object, world: &Matrix) -> Result<Part, Fault> {
+        let path = object.path.clone();
+        let geom = object
+            .property(".geom")
+            .filter(|p| p.kind == Kind::Compound)
+            .ok_or_else(|| Fault::path(&path, "Curves object without a .geom compound"))?;
+        let positions = geom
+            .child("P")
+            .filter(|p| p.kind != Kind::Compound)
+            .ok_or_else(|| Fault::path(&format!("{path}/.geom"), "Curves without P"))?;
+        let n_vertices = geom
+            .child("nVertices")
+            .filter(|p| p.kind != Kind::Compound)
+            .ok_or_else(|| Fault::path(&format!("{path}/.geom"), "Curves without nVertices"))?;
+        if positions.extent != 3 || positions.pod.is_integer() {
+            return Err(Fault::path(
+                &positions.path,
+                "P must hold 3 floating-point components per point",
+            ));
+        }
+        if positions.sample_count == 0 {
+            return Err(Fault::path(&positions.path, "P has no samples"));
+        }
+        let counts = self.counts(n_vertices)?;
+        let total: u64 = counts.iter().map(|&c| u64::from(c)).sum();
+        let basis = self.basis(geom)?;
+        // Several samples make frames even when they are all equal: the file
+        // says when they are.
+        let animated = positions.sample_count > 1;
+        let sample_count = if animated { positions.sample_count } else { 1 };
+        let mut samples = Vec::new();
+        let mut times = Vec::new();
+        for index in 0..sample_count {
+            let mut points = self.points(positions, index)?;
+            if points.len() as u64 != total {
+                return Err(Fault::path(
+                    &positions.path,
+                    format!(
+                        "sample {index} has {} points but nVertices adds up to {total}",
+                        points.len()
+                    ),
+                ));
+            }
+            if *world != IDENTITY {
+                for p in &mut points {
+                    *p = transform(world, *p);
+                }
+            }
+            samples.push(points);
+            if animated {
+                times.push(self.archive.sample_time(positions, index)?);
+            }
+        }
+        let mut part = Part {
+            path: path.clone(),
+            counts,
+            samples,
+            times,
+            basis,
+            attributes: Vec::new(),
+        };
+        let vertex_count = total as usize;
+        for property in &geom.children {
+            let name = match property.name.as_str() {
+                "width" => "width".to_string(),
+                "uv" => "uv".to_string(),
+                _ => continue,
+            };
+            if let Some(attribute) =
+                self.geom_param(property, &name, vertex_count, part.counts.len())?
+            {
+                part.attributes.push(attribute);
+            }
+        }
+        if let Some(arbitrary) = geom.child(".arbGeomParams") {
+            for property in &arbitrary.children {
+                let name = property.name.clone();
+                if let Some(attribute) =
+                    self.geom_param(property, &name, vertex_count, part.counts.len())?
+                {
+                    part.attributes.push(attribute);
+                }
+            }
+        }
+        Ok(part)
+    }
+
+    fn counts(&mut self, n_vertices: &Property) -> Result<Vec<u32>, Fault> {
+        if !n_vertices.pod.is_integer() || n_vertices.extent != 1 {
+            return Err(Fault::path(&n_vertices.path, "nVertices must be integers"));
+        }
+        if n_vertices.sample_count == 0 {
+            return Err(Fault::path(&n_vertices.path, "nVertices has no samples"));
+        }
+        let first = self.archive.sample(n_vertices, 0)?;
+        // Curves whose topology changes over time cannot become one groom.
+        if !(n_vertices.first_changed == 0 && n_vertices.last_changed == 0) {
+            for index in 1..=n_vertices.last_changed {
+                if self.archive.sample(n_vertices, index)? != first {
+                    return Err(Fault::path(
+                        &n_vertices.path,
+                        format!("the curve topology changes at sample {index} (not supported)"),
+                    ));
+                }
+            }
+        }
+        let values = self.sample_values(n_vertices, 0)?;
+        values
+            .into_iter()
+            .enumerate()
+            .map(|(i, v)| {
+                if v >= 0.0 && v <= f64::from(u32::MAX) {
+                    Ok(v as u32)
+                } else {
+                    Err(Fault::path(
+                        &n_vertices.path,
+                        format!("curve {i} has {v} vertices"),
+                    ))
+                }
+            })
+            .collect()
+    }
+
+    fn basis(&mut self, geom: &Property) -> Result<CurveBasis, Fault> {
+        let Some(property) = geom
+            .child("curveBasisAndType")
+            .filter(|p| p.sample_count > 0)
+        else {
+            // The reference's default: cubic Bézier.
+            return Ok(CurveBasis::Bezier);
+        };
+        let values = self.sample_values(property, 0)?;
+        let curve_type = values.first().copied().unwrap_or(0.0) as u32;
+        let basis = values.get(2).copied().unwrap_or(0.0) as u32;
+        if curve_type == 1 {
+            return Ok(CurveBasis::Linear);
+        }
+        Ok(match basis {
+            2 => CurveBasis::Bspline,
+            3 => CurveBasis::CatmullRom,
+            4 => CurveBasis::Hermite,
+            5 => CurveBasis::Power,
+            // Bézier, and "no basis" on cubic curves.
+            _ => CurveBasis::Bezier,
+        })
+    }
+
+    /// A geometry parameter as an attribute (first sample), or `None` with a
+    /// note when its values cannot be matched to the curves.
+    fn geom_param(
+        &mut self,
+        property: &Property,
+        name: &str,
+        vertex_count: usize,
+        curve_count: usize,
+    ) -> Result<Option<Attribute>, Fault> {
+        let (values_property, indices) = match property.kind {
+            Kind::Compound => match property.child(".vals") {
+                Some(vals) if vals.kind != Kind::Compound => {
+                    let indices = match property.child(".indices") {
+                        Some(indices)
+                            if indices.kind != Kind::Compound && indices.sample_count > 0 =>
+                        {
+                            Some(self.sample_values(indices, 0)?)
+                        }
+                        _ => None,
+                    };
+                    (vals, indices)
+                }
+                _ => return Ok(None),
+            },
+            _ => (property, None),
+        };
+        if values_property.sample_count == 0 {
+            return Ok(None);
+        }
+        if values_property.pod.size().is_none() {
+            self.notes
+                .push(format!("skipped {}: string values", property.path));
+            return Ok(None);
+        }
+        let extent = usize::from(values_property.extent);
+        if extent > 3 {
+            self.notes.push(format!(
+                "skipped {}: {extent} components per value",
+                property.path
+            ));
+            return Ok(None);
+        }
+        let mut values = self.sample_values(values_property, 0)?;
+        if let Some(indices) = indices {
+            let groups = values.len() / extent;
+            let mut expanded = Vec::with_capacity(indices.len().saturating_mul(extent));
+            self.budget
+                .take(indices.len().saturating_mul(extent * 8), &property.path)?;
+            for index in indices {
+                let i = index as usize;
+                if index < 0.0 || i >= groups {
+                    return Err(Fault::path(
+                        &property.path,
+                        format!("index {index} is out of range ({groups} values)"),
+                    ));
+                }
+                expanded.extend_from_slice(&values[i * extent..(i + 1) * extent]);
+            }
+            values = expanded;
+        }
+        let count = values.len() / extent;
+        let declared = property.metadata.get("geoScope").unwrap_or_default();
+        let scope = if count == vertex_count
+            && (count != curve_count || declared == "vtx" || declared == "var")
+        {
+            Scope::Vertex
+        } else if count == curve_count {
+            Scope::Strand
+        } else if count == 1 && name == "width" {
+            // A constant width: the same for every curve.
+            values = values.repeat(curve_count);
+            Scope::Strand
+        } else if count == 1 {
+            // Groom-level values (such as Unreal's groom_version_major) have
+            // no place in a groom's per-strand or per-vertex attributes.
+            return Ok(None);
+        } else {
+            self.notes.push(format!(
+                "skipped {}: {count} values for {curve_count} curves and {vertex_count} points",
+                property.path
+            ));
+            return Ok(None);
+        };
+        let name = match (name, scope) {
+            ("uv", Scope::Strand) => "root_uv",
+            (other, _) => other,
+        };
+        let integer = values_property.pod.is_integer() && extent == 1;
+        let attribute_values = match extent {
+            1 if integer => AttributeValues::Int(
+                values
+                    .iter()
+                    .map(|&v| v.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32)
+                    .collect(),
+            ),
+            1 => AttributeValues::Float(values.iter().map(|&v| v as f32).collect()),
+            2 => AttributeValues::Vec2(
+                values
+                    .chunks_exact(2)
+                    .map(|c| [c[0] as f32, c[1] as f32])
+                    .collect(),
+            ),
+            _ => AttributeValues::Vec3(
+                values
+                    .chunks_exact(3)
+                    .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+                    .collect(),
+            ),
+        };
+        Ok(Some(Attribute {
+            name: name.to_string(),
+            scope,
+            values: attribute_values,
+        }))
+    }
+}
+
+fn same_kind(a: &AttributeValues, b: &AttributeValues) -> bool {
+    std::mem::discriminant(a) == std::mem::discriminant(b)
+}
+
+fn append(into: &mut AttributeValues, from: &AttributeValues) {
+    match (into, from) {
+        (AttributeValues::Float(a), AttributeValues::Float(b)) => a.extend_from_slice(b),
+        (AttributeValues::Vec2(a), AttributeValues::Vec2(b)) => a.extend_from_slice(b),
+        (AttributeValues::Vec3(a), AttributeValues::Vec3(b)) => a.extend_from_slice(b),
+        (AttributeValues::Int(a), AttributeValues::Int(b)) => a.extend_from_slice(b),
+        _ => {}
+    }
+}
+
+/// One groom from all Curves objects: strands one object after another;
+/// attributes every object has; frames when any object is animated.
+fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
+    let mut groom = Groom::default();
+    let Some(first) = parts.first() else {
+        return Err(Fault::path("/", "the file has no Curves object"));
+    };
+    groom.basis = first.basis;
+    for part in &parts {
+        if part.basis != groom.basis {
+            return Err(Fault::path(
+                &part.path,
+                format!(
+                    "curves of basis {} cannot be merged with curves of basis {}",
+                    part.basis.name(),
+                    groom.basis.name()
+                ),
+            ));
+        }
+    }
+    let animated = parts
+        .iter()
+        .max_by_key(|p| p.times.len())
+        .filter(|p| !p.times.is_empty());
+    let frame_times: Vec<f64> = animated.map(|p| p.times.clone()).unwrap_or_default();
+    for part in &parts {
+        groom.strand_vertex_counts.extend_from_slice(&part.counts);
+        if let Some(points) = part.samples.first() {
+            groom.points.extend_from_slice(points);
+        }
+    }
+    // Static objects are repeated in every frame of the animated ones.
+    let frame_bytes = groom.points.len().saturating_mul(12);
+    budget.take(frame_bytes.saturating_mul(frame_times.len()), "/")?;
+    for (index, &time) in frame_times.iter().enumerate() {
+        let mut points = Vec::with_capacity(groom.points.len());
+        for part in &parts {
+            let sample = part
+                .samples
+                .get(index)
+                .or_else(|| part.samples.last())
+                .map(Vec::as_slice)
+                .unwrap_or_default();
+            points.extend_from_slice(sample);
+        }
+        groom.frames.push(Frame { time, points });
+    }
+    for attribute in &first.attributes {
+        let mut merged = attribute.clone();
+        let everywhere = parts.iter().skip(1).all(|part| {
+            part.attributes.iter().any(|a| {
+                a.name == attribute.name
+                    && a.scope == attribute.scope
+                    && same_kind(&a.values, &attribute.values)
+            })
+        });
+        if !everywhere {
+            continue;
+        }
+        for part in parts.iter().skip(1) {
+            if let Some(a) = part.attributes.iter().find(|a| a.name == attribute.name) {
+                append(&mut merged.values, &a.values);
+            }
+        }
+        groom.set_attribute(merged);
+    }
+    Ok(groom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rotation_follows_imath_row_vectors() {
+        // 90 degrees about Z takes +X to +Y.
+        let m = axis_angle([0.0, 0.0, 1.0], 90.0);
+        let p = transform(&m, [1.0, 0.0, 0.0]);
+        assert!((p[0]).abs() < 1e-6 && (p[1] - 1.0).abs() < 1e-6 && p[2].abs() < 1e-6);
+    }
+
+    #[test]
+    fn translation_is_the_last_row() {
+        let mut m = IDENTITY;
+        m[3] = [1.0, 2.0, 3.0, 1.0];
+        assert_eq!(transform(&m, [1.0, 1.0, 1.0]), [2.0, 3.0, 4.0]);
+    }
+
+    #[test]
+    fn halves() {
+        assert_eq!(half_to_f32(0x3c00), 1.0);
+        assert_eq!(half_to_f32(0xc000), -2.0);
+        assert_eq!(half_to_f32(0x0000), 0.0);
+    }
+}

@@ -1,0 +1,938 @@
+//! USD import: `.usda` text and `.usdc` crate files (`.usd` is sniffed).
+//!
+//! Both readers fill the same small layer model ([`Stage`]: prims in
+//! depth-first order with their typed attributes); [`to_groom`] then turns
+//! every defined `BasisCurves` prim into strands, with each prim's transform
+//! (its `xformOpOrder`, composed through its parents) applied to the points.
+//! Composition arcs (references, payloads, variants, sublayers) are not
+//! followed: only what the file itself defines is read.
+
+mod crate_reader;
+mod usda;
+
+use crate::{ImportError, Place};
+use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
+use std::path::Path;
+
+/// Reads a `.usda`, `.usdc` or `.usd` file, telling text from crate by the
+/// first bytes rather than the extension.
+pub fn read(path: &Path) -> Result<Groom, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    read_bytes(path, &bytes)
+}
+
+/// Reads USD from bytes already in memory; `path` names them in errors.
+pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
+    let stage = if bytes.starts_with(b"PXR-USDC") {
+        crate_reader::read(path, bytes)?
+    } else if bytes.starts_with(b"#usda ") {
+        usda::read(path, bytes)?
+    } else {
+        return Err(ImportError::malformed(
+            path,
+            Place::Offset(0),
+            "not a USD file: it starts with neither `#usda` (text) nor `PXR-USDC` (crate)",
+        ));
+    };
+    let mut groom = to_groom(path, &stage)?;
+    groom.provenance.format = "usd".into();
+    Ok(groom)
+}
+
+/// A value as the readers give it: numbers widened to f64 (f32 values stay
+/// exact), or text (tokens, strings, asset paths).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Value {
+    Numbers {
+        /// Numbers per element: 1 for scalars, 3 for `float3`, 16 for `matrix4d`.
+        components: usize,
+        array: bool,
+        data: Vec<f64>,
+    },
+    Text {
+        array: bool,
+        data: Vec<String>,
+    },
+    /// `None`: a blocked value.
+    Blocked,
+    /// A value of a type this importer does not interpret.
+    Other,
+}
+
+impl Value {
+    fn numbers(&self, components: usize) -> Option<&[f64]> {
+        match self {
+            Value::Numbers {
+                components: c,
+                data,
+                ..
+            } if *c == components => Some(data),
+            _ => None,
+        }
+    }
+
+    fn text(&self) -> Option<&[String]> {
+        match self {
+            Value::Text { data, .. } => Some(data),
+            _ => None,
+        }
+    }
+}
+
+/// One attribute with its default value and time samples.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct UsdAttribute {
+    pub name: String,
+    pub type_name: String,
+    pub default: Option<Value>,
+    /// `(time code, value)`, as the file lists them.
+    pub samples: Vec<(f64, Value)>,
+    pub interpolation: Option<String>,
+    /// Values per element of a primvar (`elementSize`), when authored.
+    pub element_size: Option<f64>,
+    /// Where the attribute is: line of its declaration or its path.
+    pub place: Place,
+}
+
+impl UsdAttribute {
+    /// The default value, or the first time sample when there is none.
+    fn static_value(&self) -> Option<&Value> {
+        match &self.default {
+            Some(Value::Blocked) | None => self.samples.first().map(|(_, v)| v),
+            Some(value) => Some(value),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Specifier {
+    Def,
+    Over,
+    Class,
+}
+
+/// One prim spec; `parent` indexes an earlier prim of [`Stage::prims`].
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Prim {
+    pub path: String,
+    pub parent: Option<usize>,
+    pub type_name: String,
+    pub specifier: Specifier,
+    /// Prims inside a variant are not part of the stage unless selected;
+    /// this importer does not select variants.
+    pub in_variant: bool,
+    pub attributes: Vec<UsdAttribute>,
+    pub place: Place,
+}
+
+impl Prim {
+    fn attribute(&self, name: &str) -> Option<&UsdAttribute> {
+        self.attributes.iter().find(|a| a.name == name)
+    }
+}
+
+/// The layer: stage metadata and prims, parents before children.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Stage {
+    pub meters_per_unit: Option<f64>,
+    pub up_axis: Option<String>,
+    pub time_codes_per_second: Option<f64>,
+    pub frames_per_second: Option<f64>,
+    pub prims: Vec<Prim>,
+    /// What the reader passed over (variant sets), for the groom's info.
+    pub notes: Vec<String>,
+}
+
+/// What an element of a USD value type holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ElementKind {
+    /// `components` numbers; `single` when the type is 32-bit or half float.
+    Numbers {
+        components: usize,
+        single: bool,
+    },
+    Text,
+}
+
+/// The element kind of a USD type name without `[]`, e.g. `point3f`.
+pub(crate) fn element_kind(type_name: &str) -> Option<ElementKind> {
+    let numbers = |components, single| Some(ElementKind::Numbers { components, single });
+    match type_name {
+        "bool" | "uchar" | "int" | "uint" | "int64" | "uint64" => return numbers(1, false),
+        "half" | "float" => return numbers(1, true),
+        "double" | "timecode" => return numbers(1, false),
+        "token" | "string" | "asset" => return Some(ElementKind::Text),
+        "quath" | "quatf" => return numbers(4, true),
+        "quatd" => return numbers(4, false),
+        "matrix2d" => return numbers(4, false),
+        "matrix3d" => return numbers(9, false),
+        "matrix4d" | "frame4d" => return numbers(16, false),
+        _ => {}
+    }
+    let bytes = type_name.as_bytes();
+    let last = *bytes.last()?;
+    if last.is_ascii_digit() {
+        let components = usize::from(last - b'0');
+        let prefix = type_name.get(..type_name.len() - 1)?;
+        if !(2..=4).contains(&components) {
+            return None;
+        }
+        return match prefix {
+            "half" | "float" => numbers(components, true),
+            "double" | "int" => numbers(components, false),
+            _ => None,
+        };
+    }
+    let digit = *bytes.get(bytes.len().checked_sub(2)?)?;
+    if !digit.is_ascii_digit() {
+        return None;
+    }
+    let components = usize::from(digit - b'0');
+    let prefix = type_name.get(..type_name.len() - 2)?;
+    let role_ok = match prefix {
+        "point" | "normal" | "vector" | "color" => components == 3 || components == 4,
+        "texCoord" => components == 2 || components == 3,
+        _ => false,
+    };
+    if !role_ok || components == 4 && prefix != "color" {
+        return None;
+    }
+    match last {
+        b'h' | b'f' => numbers(components, true),
+        b'd' => numbers(components, false),
+        _ => None,
+    }
+}
+
+/// A 4x4 matrix acting on column vectors: `p' = m · [p, 1]`.
+type Matrix = [[f64; 4]; 4];
+
+const IDENTITY: Matrix = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+    [0.0, 0.0, 0.0, 1.0],
+];
+
+fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
+    let mut m = [[0.0; 4]; 4];
+    for (r, row) in m.iter_mut().enumerate() {
+        for (c, cell) in row.iter_mut().enumerate() {
+            *cell = (0..4).map(|k| a[r][k] * b[k][c]).sum();
+        }
+    }
+    m
+}
+
+fn transform_point(m: &Matrix, p: [f64; 3]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (r, value) in out.iter_mut().enumerate() {
+        *value = m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3];
+    }
+    out
+}
+
+/// Gauss-Jordan inverse with partial pivoting; `None` when singular.
+fn invert(m: &Matrix) -> Option<Matrix> {
+    let mut a = *m;
+    let mut inv = IDENTITY;
+    for col in 0..4 {
+        let pivot = (col..4).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
+        if a[pivot][col].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(col, pivot);
+        inv.swap(col, pivot);
+        let d = a[col][col];
+        for k in 0..4 {
+            a[col][k] /= d;
+            inv[col][k] /= d;
+        }
+        for row in 0..4 {
+            if row != col {
+                let f = a[row][col];
+                for k in 0..4 {
+                    a[row][k] -= f * a[col][k];
+                    inv[row][k] -= f * inv[col][k];
+                }
+            }
+        }
+    }
+    Some(inv)
+}
+
+fn rotation(axis: usize, degrees: f64) -> Matrix {
+    let (s, c) = degrees.to_radians().sin_cos();
+    let mut m = IDENTITY;
+    let (i, j) = match axis {
+        0 => (1, 2),
+        1 => (2, 0),
+        _ => (0, 1),
+    };
+    m[i][i] = c;
+    m[i][j] = -s;
+    m[j][i] = s;
+    m[j][j] = c;
+    m
+}
+
+/// The matrix of one xformOp given its kind (`translate`, `rotateXYZ`, ...)
+/// and value.
+fn op_matrix(kind: &str, v: &[f64]) -> Option<Matrix> {
+    let axis_of = |c: u8| match c {
+        b'X' => Some(0),
+        b'Y' => Some(1),
+        b'Z' => Some(2),
+        _ => None,
+    };
+    match (kind, v.len()) {
+        ("translate", 3) => {
+            let mut m = IDENTITY;
+            m[0][3] = v[0];
+            m[1][3] = v[1];
+            m[2][3] = v[2];
+            Some(m)
+        }
+        ("scale", 3) => {
+            let mut m = IDENTITY;
+            m[0][0] = v[0];
+            m[1][1] = v[1];
+            m[2][2] = v[2];
+            Some(m)
+        }
+        ("rotateX", 1) => Some(rotation(0, v[0])),
+        ("rotateY", 1) => Some(rotation(1, v[0])),
+        ("rotateZ", 1) => Some(rotation(2, v[0])),
+        ("orient", 4) => {
+            // (real, i, j, k), normalised.
+            let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if n == 0.0 {
+                return None;
+            }
+            let (w, x, y, z) = (v[0] / n, v[1] / n, v[2] / n, v[3] / n);
+            Some([
+                [
+                    1.0 - 2.0 * (y * y + z * z),
+                    2.0 * (x * y - z * w),
+                    2.0 * (x * z + y * w),
+                    0.0,
+                ],
+                [
+                    2.0 * (x * y + z * w),
+                    1.0 - 2.0 * (x * x + z * z),
+                    2.0 * (y * z - x * w),
+                    0.0,
+                ],
+                [
+                    2.0 * (x * z - y * w),
+                    2.0 * (y * z + x * w),
+                    1.0 - 2.0 * (x * x + y * y),
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 1.0],
+            ])
+        }
+        ("transform", 16) => {
+            // USD matrices are row-major for row vectors: transpose.
+            let mut m = IDENTITY;
+            for (r, row) in m.iter_mut().enumerate() {
+                for (c, cell) in row.iter_mut().enumerate() {
+                    *cell = v[c * 4 + r];
+                }
+            }
+            Some(m)
+        }
+        (name, 3) if name.len() == 9 && name.starts_with("rotate") => {
+            // rotateABC rotates about A first, then B, then C.
+            let order = &name.as_bytes()[6..];
+            let mut m = IDENTITY;
+            for (i, &axis) in order.iter().enumerate() {
+                let axis = axis_of(axis)?;
+                m = multiply(&rotation(axis, v[i]), &m);
+            }
+            Some(m)
+        }
+        _ => None,
+    }
+}
+
+/// The local transform of a prim and whether it resets the parent's.
+fn local_transform(file: &Path, prim: &Prim) -> Result<(Matrix, bool), ImportError> {
+    let Some(order) = prim.attribute("xformOpOrder") else {
+        return Ok((IDENTITY, false));
+    };
+    let bad = |message: String| ImportError::malformed(file, order.place.clone(), message);
+    let names = match order.static_value() {
+        Some(value) => value
+            .text()
+            .ok_or_else(|| bad("xformOpOrder is not a token array".into()))?,
+        None => return Ok((IDENTITY, false)),
+    };
+    let mut matrix = IDENTITY;
+    let mut reset = false;
+    for (index, name) in names.iter().enumerate() {
+        if name == "!resetXformStack!" {
+            if index != 0 {
+                return Err(bad(
+                    "!resetXformStack! must come first in xformOpOrder".into()
+                ));
+            }
+            reset = true;
+            continue;
+        }
+        let (inverse, op_name) = match name.strip_prefix("!invert!") {
+            Some(rest) => (true, rest),
+            None => (false, name.as_str()),
+        };
+        let kind = op_name
+            .strip_prefix("xformOp:")
+            .and_then(|rest| rest.split(':').next())
+            .ok_or_else(|| bad(format!("'{name}' in xformOpOrder is not an xformOp")))?;
+        let attribute = prim.attribute(op_name).ok_or_else(|| {
+            bad(format!(
+                "xformOpOrder names '{op_name}', which the prim lacks"
+            ))
+        })?;
+        let values = match attribute.static_value() {
+            Some(Value::Numbers { data, .. }) => data.as_slice(),
+            _ => {
+                return Err(ImportError::malformed(
+                    file,
+                    attribute.place.clone(),
+                    format!("{op_name} has no numeric value"),
+                ))
+            }
+        };
+        let op_error = || {
+            ImportError::malformed(
+                file,
+                attribute.place.clone(),
+                format!(
+                    "{op_name}: unsupported op or wrong number of values ({})",
+                    values.len()
+                ),
+            )
+        };
+        let mut op = op_matrix(kind, values).ok_or_else(op_error)?;
+        if inverse {
+            op = invert(&op).ok_or_else(|| bad(format!("{name}: the matrix is singular")))?;
+        }
+        matrix = multiply(&matrix, &op);
+    }
+    Ok((matrix, reset))
+}
+
+/// The strands of one BasisCurves prim.
+struct CurveSet {
+    counts: Vec<u32>,
+    points: Vec<[f32; 3]>,
+    /// `(time code, points)` for each time sample of `points`.
+    samples: Vec<(f64, Vec<[f32; 3]>)>,
+    basis: CurveBasis,
+    attributes: Vec<Attribute>,
+    notes: Vec<String>,
+}
+
+fn to_points(values: &[f64], matrix: &Matrix) -> Vec<[f32; 3]> {
+    values
+        .chunks_exact(3)
+        .map(|p| transform_point(matrix, [p[0], p[1], p[2]]).map(|c| c as f32))
+        .collect()
+}
+
+fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, ImportError> {
+    let at = |attribute: &UsdAttribute, message: String| {
+        ImportError::malformed(file, attribute.place.clone(), message)
+    };
+    let prim_error = |message: String| ImportError::malformed(file, prim.place.clone(), message);
+
+    let counts_attribute = prim.attribute("curveVertexCounts").ok_or_else(|| {
+        prim_error(format!(
+            "BasisCurves {} has no curveVertexCounts",
+            prim.path
+        ))
+    })?;
+    let counts_values = counts_attribute
+        .static_value()
+        .and_then(|v| v.numbers(1))
+        .ok_or_else(|| {
+            at(
+                counts_attribute,
+                "curveVertexCounts is not an int array".into(),
+            )
+        })?;
+    let mut counts = Vec::with_capacity(counts_values.len());
+    let mut total: u64 = 0;
+    for &count in counts_values {
+        if !(count >= 0.0 && count <= f64::from(u32::MAX) && count.fract() == 0.0) {
+            return Err(at(
+                counts_attribute,
+                format!("curve vertex count {count} is not a count"),
+            ));
+        }
+        counts.push(count as u32);
+        total += count as u64;
+    }
+
+    let points_attribute = prim
+        .attribute("points")
+        .ok_or_else(|| prim_error(format!("BasisCurves {} has no points", prim.path)))?;
+    let check_points = |values: &[f64], what: &str| -> Result<(), ImportError> {
+        if values.len() as u128 != u128::from(total) * 3 {
+            return Err(at(
+                points_attribute,
+                format!(
+                    "{what} has {} points but curveVertexCounts add up to {total}",
+                    values.len() / 3
+                ),
+            ));
+        }
+        Ok(())
+    };
+    let mut samples: Vec<(f64, Vec<[f32; 3]>)> = Vec::new();
+    for (code, value) in &points_attribute.samples {
+        if matches!(value, Value::Blocked) {
+            continue;
+        }
+        let values = value
+            .numbers(3)
+            .ok_or_else(|| at(points_attribute, "points are not a point3f array".into()))?;
+        check_points(values, &format!("the time sample at {code}"))?;
+        if !code.is_finite() {
+            return Err(at(
+                points_attribute,
+                format!("time code {code} is not finite"),
+            ));
+        }
+        samples.push((*code, to_points(values, world)));
+    }
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    samples.dedup_by(|later, earlier| later.0 == earlier.0);
+    let points = match &points_attribute.default {
+        Some(value) if !matches!(value, Value::Blocked) => {
+            let values = value
+                .numbers(3)
+                .ok_or_else(|| at(points_attribute, "points are not a point3f array".into()))?;
+            check_points(values, "points")?;
+            to_points(values, world)
+        }
+        _ => match samples.first() {
+            Some((_, first)) => first.clone(),
+            None => return Err(at(points_attribute, "points have no value".into())),
+        },
+    };
+
+    let token = |name: &str| -> Option<String> {
+        prim.attribute(name)
+            .and_then(|a| a.static_value())
+            .and_then(|v| v.text())
+            .and_then(|t| t.first().cloned())
+    };
+    // Schema fallbacks: type cubic, basis bezier.
+    let curve_type = token("type").unwrap_or_else(|| "cubic".into());
+    let basis = match curve_type.as_str() {
+        "linear" => CurveBasis::Linear,
+        "cubic" => match token("basis").as_deref().unwrap_or("bezier") {
+            "bezier" => CurveBasis::Bezier,
+            "bspline" => CurveBasis::Bspline,
+            "catmullRom" => CurveBasis::CatmullRom,
+            other => {
+                return Err(prim_error(format!(
+                    "{}: unknown curve basis '{other}'",
+                    prim.path
+                )))
+            }
+        },
+        other => {
+            return Err(prim_error(format!(
+                "{}: unknown curve type '{other}'",
+                prim.path
+            )))
+        }
+    };
+
+    let mut set = CurveSet {
+        counts,
+        points,
+        samples,
+        basis,
+        attributes: Vec::new(),
+        notes: Vec::new(),
+    };
+    // The groom has no wrap: the control points are kept as they are.
+    if let Some(wrap) = token("wrap").filter(|w| w != "nonperiodic") {
+        set.notes.push(format!("wrap {wrap} read as nonperiodic"));
+    }
+    for attribute in &prim.attributes {
+        let name = if attribute.name == "widths" {
+            "width".to_string()
+        } else if let Some(name) = attribute.name.strip_prefix("primvars:") {
+            if name.ends_with(":indices") {
+                continue;
+            }
+            if name == "st" {
+                "root_uv".to_string()
+            } else {
+                name.to_string()
+            }
+        } else {
+            continue;
+        };
+        let indices = prim
+            .attribute(&format!("{}:indices", attribute.name))
+            .and_then(|a| a.static_value())
+            .and_then(|v| v.numbers(1));
+        match primvar(file, attribute, &name, indices, &set)? {
+            Ok(converted) => set.attributes.push(converted),
+            Err(note) => set.notes.push(note),
+        }
+    }
+    Ok(set)
+}
+
+/// Converts a primvar (or `widths`) to a groom attribute; `Ok(Err(note))`
+/// for primvars a groom cannot hold, which are skipped with a note.
+fn primvar(
+    file: &Path,
+    attribute: &UsdAttribute,
+    name: &str,
+    indices: Option<&[f64]>,
+    set: &CurveSet,
+) -> Result<Result<Attribute, String>, ImportError> {
+    let skip = |why: &str| Ok(Err(format!("skipped {}: {why}", attribute.name)));
+    let Some(value) = attribute.static_value() else {
+        return skip("no value");
+    };
+    if let Some(size) = attribute.element_size.filter(|&s| s != 1.0) {
+        return skip(&format!("elementSize {size}"));
+    }
+    let base_type = attribute.type_name.trim_end_matches("[]");
+    let (components, data) = match value {
+        Value::Numbers {
+            components,
+            array: true,
+            data,
+        } => (*components, data),
+        _ => return skip("not a numeric array"),
+    };
+    if components == 0 || components > 3 {
+        return skip("more than 3 components");
+    }
+    let mut data: Vec<f64> = data.clone();
+    if let Some(indices) = indices {
+        let element_count = data.len() / components;
+        let mut expanded = Vec::with_capacity(indices.len().saturating_mul(components));
+        for &index in indices {
+            if !(index >= 0.0 && (index as usize) < element_count) {
+                return Err(ImportError::malformed(
+                    file,
+                    attribute.place.clone(),
+                    format!("index {index} is out of range of {element_count} values"),
+                ));
+            }
+            let start = index as usize * components;
+            expanded.extend_from_slice(data.get(start..start + components).unwrap_or(&[]));
+        }
+        data = expanded;
+    }
+    let elements = data.len() / components;
+    let vertices = set.points.len();
+    let strands = set.counts.len();
+    let interpolation = attribute.interpolation.as_deref().unwrap_or(
+        // Fallbacks: widths are per vertex, primvars constant.
+        if attribute.name == "widths" {
+            "vertex"
+        } else {
+            "constant"
+        },
+    );
+    let (scope, expected) = match interpolation {
+        "vertex" => (Scope::Vertex, vertices),
+        "varying" if elements == vertices => (Scope::Vertex, vertices),
+        "uniform" => (Scope::Strand, strands),
+        "constant" => (Scope::Strand, 1),
+        "varying" => return skip("varying interpolation of cubic curves"),
+        other => return skip(&format!("{other} interpolation")),
+    };
+    if elements != expected {
+        return Err(ImportError::malformed(
+            file,
+            attribute.place.clone(),
+            format!(
+                "{} has {elements} values but {interpolation} interpolation needs {expected}",
+                attribute.name
+            ),
+        ));
+    }
+    if interpolation == "constant" {
+        let one = data.clone();
+        data = (0..strands).flat_map(|_| one.iter().copied()).collect();
+    }
+    let integral = matches!(
+        base_type,
+        "int" | "uint" | "int64" | "uint64" | "bool" | "uchar"
+    );
+    let values = match components {
+        1 if integral => {
+            let mut ints = Vec::with_capacity(data.len());
+            for &x in &data {
+                if x < f64::from(i32::MIN) || x > f64::from(i32::MAX) {
+                    return skip("integers beyond 32 bits");
+                }
+                ints.push(x as i32);
+            }
+            AttributeValues::Int(ints)
+        }
+        1 => AttributeValues::Float(data.iter().map(|&x| x as f32).collect()),
+        2 => AttributeValues::Vec2(
+            data.chunks_exact(2)
+                .map(|c| [c[0] as f32, c[1] as f32])
+                .collect(),
+        ),
+        _ => AttributeValues::Vec3(
+            data.chunks_exact(3)
+                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+                .collect(),
+        ),
+    };
+    Ok(Ok(Attribute {
+        name: name.to_string(),
+        scope,
+        values,
+    }))
+}
+
+/// Index of a basis in the per-strand `curve_basis` attribute of grooms
+/// that mix bases.
+fn basis_code(basis: CurveBasis) -> i32 {
+    match basis {
+        CurveBasis::Linear => 0,
+        CurveBasis::Bezier => 1,
+        CurveBasis::Bspline => 2,
+        CurveBasis::CatmullRom => 3,
+        CurveBasis::Hermite => 4,
+        CurveBasis::Power => 5,
+    }
+}
+
+fn empty_like(values: &AttributeValues, len: usize) -> AttributeValues {
+    match values {
+        AttributeValues::Float(_) => AttributeValues::Float(vec![0.0; len]),
+        AttributeValues::Vec2(_) => AttributeValues::Vec2(vec![[0.0; 2]; len]),
+        AttributeValues::Vec3(_) => AttributeValues::Vec3(vec![[0.0; 3]; len]),
+        AttributeValues::Int(_) => AttributeValues::Int(vec![0; len]),
+    }
+}
+
+fn append(into: &mut AttributeValues, from: &AttributeValues) -> bool {
+    match (into, from) {
+        (AttributeValues::Float(a), AttributeValues::Float(b)) => a.extend_from_slice(b),
+        (AttributeValues::Vec2(a), AttributeValues::Vec2(b)) => a.extend_from_slice(b),
+        (AttributeValues::Vec3(a), AttributeValues::Vec3(b)) => a.extend_from_slice(b),
+        (AttributeValues::Int(a), AttributeValues::Int(b)) => a.extend_from_slice(b),
+        _ => return false,
+    }
+    true
+}
+
+/// Turns the layer into one groom.
+pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError> {
+    let mut groom = Groom::default();
+    let meters_per_unit = stage.meters_per_unit.unwrap_or(0.01);
+    if !(meters_per_unit.is_finite() && meters_per_unit > 0.0) {
+        return Err(ImportError::malformed(
+            file,
+            Place::File,
+            format!("metersPerUnit {meters_per_unit} is not a positive number"),
+        ));
+    }
+    groom.units = Units { meters_per_unit };
+    groom.up_axis = match stage.up_axis.as_deref() {
+        None | Some("Y") => UpAxis::Y,
+        Some("Z") => UpAxis::Z,
+        Some(other) => {
+            return Err(ImportError::malformed(
+                file,
+                Place::File,
+                format!("upAxis '{other}' is neither Y nor Z"),
+            ))
+        }
+    };
+    let codes_per_second = stage
+        .time_codes_per_second
+        .or(stage.frames_per_second)
+        .unwrap_or(24.0);
+    if !(codes_per_second.is_finite() && codes_per_second > 0.0) {
+        return Err(ImportError::malformed(
+            file,
+            Place::File,
+            format!("timeCodesPerSecond {codes_per_second} is not a positive number"),
+        ));
+    }
+
+    // World transforms and whether each prim is on the stage (defined,
+    // with defined ancestors, outside classes and variants).
+    let mut worlds: Vec<Matrix> = Vec::with_capacity(stage.prims.len());
+    let mut active: Vec<bool> = Vec::with_capacity(stage.prims.len());
+    let mut sets: Vec<(String, CurveSet)> = Vec::new();
+    for (index, prim) in stage.prims.iter().enumerate() {
+        let parent = prim.parent.filter(|&p| p < index);
+        let (parent_world, parent_active) = match parent {
+            Some(p) => (
+                worlds.get(p).copied().unwrap_or(IDENTITY),
+                active.get(p).copied().unwrap_or(false),
+            ),
+            None => (IDENTITY, true),
+        };
+        let is_active = parent_active && prim.specifier == Specifier::Def && !prim.in_variant;
+        let (local, reset) = if is_active {
+            local_transform(file, prim)?
+        } else {
+            (IDENTITY, false)
+        };
+        let world = if reset {
+            local
+        } else {
+            multiply(&parent_world, &local)
+        };
+        worlds.push(world);
+        active.push(is_active);
+        if is_active && prim.type_name == "BasisCurves" {
+            sets.push((prim.path.clone(), curve_set(file, prim, &world)?));
+        }
+    }
+    if sets.is_empty() {
+        return Err(ImportError::malformed(
+            file,
+            Place::File,
+            "no BasisCurves prim defined in the file",
+        ));
+    }
+
+    // Frames: every animated prim must be sampled at the same time codes;
+    // static prims hold still.
+    let codes: Option<Vec<f64>> = sets
+        .iter()
+        .find(|(_, s)| !s.samples.is_empty())
+        .map(|(_, s)| s.samples.iter().map(|(c, _)| *c).collect());
+    if let Some(codes) = &codes {
+        for (path, set) in &sets {
+            let these: Vec<f64> = set.samples.iter().map(|(c, _)| *c).collect();
+            if !these.is_empty() && &these != codes {
+                return Err(ImportError::malformed(
+                    file,
+                    Place::Path(path.clone()),
+                    "points are sampled at other time codes than those of the first animated curves",
+                ));
+            }
+        }
+        groom.frames = codes
+            .iter()
+            .map(|&code| Frame {
+                time: code / codes_per_second,
+                points: Vec::new(),
+            })
+            .collect();
+    }
+
+    let bases: Vec<CurveBasis> = sets.iter().map(|(_, s)| s.basis).collect();
+    let mixed = bases.windows(2).any(|w| w[0] != w[1]);
+    groom.basis = if mixed {
+        bases
+            .iter()
+            .copied()
+            .find(|&b| b != CurveBasis::Linear)
+            .unwrap_or_default()
+    } else {
+        bases.first().copied().unwrap_or_default()
+    };
+
+    let several = sets.len() > 1;
+    let mut group_ids = Vec::new();
+    let mut basis_codes = Vec::new();
+    let mut notes = stage.notes.clone();
+    for (group, (path, set)) in sets.into_iter().enumerate() {
+        let vertices_before = groom.points.len();
+        let strands_before = groom.strand_vertex_counts.len();
+        for attribute in set.attributes {
+            let before = match attribute.scope {
+                Scope::Vertex => vertices_before,
+                Scope::Strand => strands_before,
+            };
+            match groom.attribute_mut(&attribute.name) {
+                Some(existing) if existing.scope == attribute.scope => {
+                    if !append(&mut existing.values, &attribute.values) {
+                        return Err(ImportError::malformed(
+                            file,
+                            Place::Path(path.clone()),
+                            format!(
+                                "primvar '{}' has another type than in an earlier curves prim",
+                                attribute.name
+                            ),
+                        ));
+                    }
+                }
+                Some(_) => {
+                    return Err(ImportError::malformed(
+                        file,
+                        Place::Path(path.clone()),
+                        format!(
+                            "primvar '{}' has another interpolation than in an earlier curves prim",
+                            attribute.name
+                        ),
+                    ))
+                }
+                None => {
+                    let mut values = empty_like(&attribute.values, before);
+                    append(&mut values, &attribute.values);
+                    groom.attributes.push(Attribute {
+                        values,
+                        ..attribute
+                    });
+                }
+            }
+        }
+        group_ids.extend(std::iter::repeat_n(group as i32, set.counts.len()));
+        basis_codes.extend(std::iter::repeat_n(basis_code(set.basis), set.counts.len()));
+        for (index, frame) in groom.frames.iter_mut().enumerate() {
+            match set.samples.get(index) {
+                Some((_, points)) => frame.points.extend_from_slice(points),
+                None => frame.points.extend_from_slice(&set.points),
+            }
+        }
+        groom.strand_vertex_counts.extend_from_slice(&set.counts);
+        groom.points.extend_from_slice(&set.points);
+        notes.extend(set.notes.into_iter().map(|n| format!("{path}: {n}")));
+        // Attributes this prim lacks are zero for its strands.
+        let (vertices, strands) = (groom.points.len(), groom.strand_vertex_counts.len());
+        for attribute in &mut groom.attributes {
+            let target = match attribute.scope {
+                Scope::Vertex => vertices,
+                Scope::Strand => strands,
+            };
+            let missing = target.saturating_sub(attribute.values.len());
+            if missing > 0 {
+                let zeros = empty_like(&attribute.values, missing);
+                append(&mut attribute.values, &zeros);
+            }
+        }
+    }
+    if several {
+        groom.set_attribute(Attribute::per_strand(
+            "group_id",
+            AttributeValues::Int(group_ids),
+        ));
+    }
+    if mixed {
+        groom.set_attribute(Attribute::per_strand(
+            "curve_basis",
+            AttributeValues::Int(basis_codes),
+        ));
+        notes.push("curves of several bases: per-strand basis in 'curve_basis' (0 linear, 1 bezier, 2 bspline, 3 catmullRom)".into());
+    }
+    groom.provenance.info = notes.join("; ");
+    Ok(groom)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,134 @@
+//! Small f32 vector and quaternion helpers. Quaternions are `[x, y, z, w]`
+//! (Hamilton product), the layout glam and glTF use.
+
+pub type V3 = [f32; 3];
+pub type Quat = [f32; 4];
+
+pub const IDENTITY: Quat = [0.0, 0.0, 0.0, 1.0];
+
+#[inline(always)]
+pub fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+#[inline(always)]
+pub fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+#[inline(always)]
+pub fn scale(a: V3, s: f32) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+#[inline(always)]
+pub fn dot(a: V3, b: V3) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+#[inline(always)]
+pub fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+#[inline(always)]
+pub fn length(a: V3) -> f32 {
+    dot(a, a).sqrt()
+}
+#[inline(always)]
+pub fn is_finite3(a: V3) -> bool {
+    a[0].is_finite() && a[1].is_finite() && a[2].is_finite()
+}
+
+/// Hamilton product `a * b`.
+#[inline(always)]
+pub fn qmul(a: Quat, b: Quat) -> Quat {
+    [
+        a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+        a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+        a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+        a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
+    ]
+}
+#[inline(always)]
+pub fn conj(q: Quat) -> Quat {
+    [-q[0], -q[1], -q[2], q[3]]
+}
+#[inline(always)]
+pub fn pure(v: V3) -> Quat {
+    [v[0], v[1], v[2], 0.0]
+}
+#[inline(always)]
+pub fn imag(q: Quat) -> V3 {
+    [q[0], q[1], q[2]]
+}
+#[inline(always)]
+pub fn qdot(a: Quat, b: Quat) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
+
+/// Unit quaternion; a degenerate one (zero or not finite) stays as it is so
+/// the quarantine sees it rather than a made-up frame.
+#[inline(always)]
+pub fn qnormalize(q: Quat) -> Quat {
+    let n2 = qdot(q, q);
+    if n2 > 0.0 {
+        let inv = 1.0 / n2.sqrt();
+        [q[0] * inv, q[1] * inv, q[2] * inv, q[3] * inv]
+    } else {
+        q
+    }
+}
+
+/// The Darboux vector of two adjacent frames, eq. (8): `Im(conj(q1) q2)`.
+#[inline(always)]
+pub fn darboux(q1: Quat, q2: Quat) -> V3 {
+    // Im(conj(q1) * q2) written out.
+    [
+        q1[3] * q2[0] - q1[0] * q2[3] - q1[1] * q2[2] + q1[2] * q2[1],
+        q1[3] * q2[1] + q1[0] * q2[2] - q1[1] * q2[3] - q1[2] * q2[0],
+        q1[3] * q2[2] - q1[0] * q2[1] + q1[1] * q2[0] - q1[2] * q2[3],
+    ]
+}
+
+/// `R(q) e3`: the frame's tangent.
+#[inline(always)]
+pub fn tangent(q: Quat) -> V3 {
+    let [x, y, z, w] = q;
+    [
+        2.0 * (x * z + w * y),
+        2.0 * (y * z - w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    ]
+}
+
+/// Rotates `v` by unit `q`.
+#[inline(always)]
+pub fn rotate(q: Quat, v: V3) -> V3 {
+    let u = imag(q);
+    let t = scale(cross(u, v), 2.0);
+    add(add(v, scale(t, q[3])), cross(u, t))
+}
+
+/// The shortest-arc rotation taking unit `from` to unit `to`.
+pub fn rotation_between(from: V3, to: V3) -> Quat {
+    let d = dot(from, to);
+    if d < -0.999_999 {
+        // Opposite: half a turn about any axis normal to `from`.
+        let helper = if from[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let axis = cross(from, helper);
+        let n = length(axis);
+        return [axis[0] / n, axis[1] / n, axis[2] / n, 0.0];
+    }
+    let c = cross(from, to);
+    qnormalize([c[0], c[1], c[2], 1.0 + d])
+}
+
+/// The unit quaternion with imaginary part `v` and a non-negative real part.
+pub fn from_imaginary(v: V3) -> Quat {
+    let w2 = 1.0 - dot(v, v);
+    qnormalize([v[0], v[1], v[2], w2.max(0.0).sqrt()])
+}

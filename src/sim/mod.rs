@@ -1,0 +1,368 @@
+//! The hair solver of `000_*` (shared/METHOD.md A-D): position- and
+//! orientation-based Cosserat rods (PBD) whose rest shape comes from four
+//! kinds of side-chain bonds that break and re-form (plasticity).
+//!
+//! No I/O here. The caller (the timeline) owns a [`StrandSet`] (all state),
+//! a [`ColliderSet`] and fills an [`Environment`] per step; a [`Solver`]
+//! owns only scratch memory and advances the strands by one step.
+//!
+//! Layout and conventions:
+//! - Metres, seconds, Y up. A strand's vertex 0 is its root.
+//! - Edge `e` of a strand (from vertex `e` to `e + 1`) is stored in the slot
+//!   of vertex `e`; the tip's slot is unused.
+//! - Joint `j` (between edges `j - 1` and `j`, the bend at vertex `j`) is
+//!   stored in the slot of vertex `j`; root and tip slots are unused.
+//! - Every vertex has unit mass (inverse mass 1, the root 0); the frame of
+//!   edge `e` has inverse mass `quaternion_mass_scale / l_e^2` (METHOD G),
+//!   except the root edge's frame, which is fixed to the scalp.
+//! - Per-step order (METHOD D): forces and bond-rate changes, rest shape
+//!   (15), `iterations` x (stretch/shear, bend/twist, collisions), one
+//!   Follow-The-Leader pass, final collision pass, velocities, bond update
+//!   (17). Strands run in parallel in groups of four (SIMD lanes); every
+//!   strand's arithmetic is the same in any group, so results are
+//!   bit-identical for any thread count.
+//!
+//! ```
+//! use groombake::sim::*;
+//! let groom = bench_groom(8, 12).unwrap();
+//! let mut strands = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+//! let mut solver = Solver::new(SolverParameters::default()).unwrap();
+//! let colliders = ColliderSet::new();
+//! // Wet: hydrogen bonds break at 10 per second.
+//! let wet = Environment { bond_rate_drive: [-10.0, 0.0, 0.0, 0.0], ..Environment::default() };
+//! for _ in 0..60 {
+//!     let report = solver.step(&mut strands, &colliders, &wet).unwrap();
+//!     assert!(report.contained.is_empty());
+//! }
+//! assert!(strands.bond_rates(BondKind::Hydrogen).iter().all(|b| *b == 0.0));
+//! let rest = strands.rest_pose();
+//! assert_eq!(rest.len(), strands.vertex_count());
+//! ```
+
+mod bonds;
+mod colliders;
+mod constraints;
+mod forces;
+mod lanes;
+mod math;
+mod quarantine;
+mod rest_pose;
+mod state;
+mod step;
+#[cfg(test)]
+mod tests;
+
+pub use colliders::{Collider, ColliderSet};
+pub use parry3d;
+pub use parry3d::math::Pose;
+pub use state::{attribute_names, StrandSet};
+pub use step::Solver;
+
+use serde::{Deserialize, Serialize};
+
+/// The four kinds of side-chain bonds (000 §5.1), in storage order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BondKind {
+    /// Broken by water, re-forms on drying (bed hair).
+    Hydrogen,
+    /// Broken by a pH change (shampoo, styling products).
+    Ionic,
+    /// Broken chemically by perm lotion.
+    Disulfide,
+    /// Never breaks in practice.
+    Peptide,
+}
+
+impl BondKind {
+    pub const ALL: [BondKind; 4] = [
+        BondKind::Hydrogen,
+        BondKind::Ionic,
+        BondKind::Disulfide,
+        BondKind::Peptide,
+    ];
+
+    /// Index into the per-kind arrays (`[f32; 4]`).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            BondKind::Hydrogen => "hydrogen",
+            BondKind::Ionic => "ionic",
+            BondKind::Disulfide => "disulfide",
+            BondKind::Peptide => "peptide",
+        }
+    }
+}
+
+/// The hair material (000 Table 1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Material {
+    /// `k_o`, the bend/twist stiffness of healthy hair, in [0, 1].
+    pub stiffness: f32,
+    /// The cuticle peel rate `s` of (14), per metre of arc length from the
+    /// root (0.33 %/cm = 0.33 /m).
+    pub cuticle_peel_per_meter: f32,
+    /// Influences `f_j` of hydrogen, ionic, disulfide and peptide bonds
+    /// (fractions of the restoring force when fully bonded; normalised by
+    /// their sum).
+    pub bond_influences: [f32; 4],
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            stiffness: 0.05,
+            cuticle_peel_per_meter: 0.33,
+            // Table 1, scene 3, with the paper's 63% of hydrogen + ionic split
+            // 0.35 / 0.28 (ours to choose, METHOD E/G).
+            bond_influences: [0.35, 0.28, 0.20, 0.17],
+        }
+    }
+}
+
+/// `k_cut = 0.5764 k_o`: the cuticle's share of bending stiffness (13).
+pub const CUTICLE_SHARE: f32 = 0.5764;
+
+impl Material {
+    pub fn check(&self) -> Result<(), SimError> {
+        let fail = |name: &'static str, message: &str| {
+            Err(SimError::Parameter {
+                name,
+                message: message.to_string(),
+            })
+        };
+        if !(self.stiffness.is_finite() && (0.0..=1.0).contains(&self.stiffness)) {
+            return fail("stiffness", "must be in [0, 1]");
+        }
+        if !(self.cuticle_peel_per_meter.is_finite() && self.cuticle_peel_per_meter >= 0.0) {
+            return fail("cuticle_peel_per_meter", "must be a non-negative number");
+        }
+        if self
+            .bond_influences
+            .iter()
+            .any(|f| !(f.is_finite() && *f >= 0.0))
+        {
+            return fail("bond_influences", "must be non-negative numbers");
+        }
+        if self.bond_influences.iter().sum::<f32>() <= 0.0 {
+            return fail("bond_influences", "must not all be zero");
+        }
+        Ok(())
+    }
+
+    /// `k` at arc length `d` from the root, (13)-(14).
+    pub fn stiffness_at(&self, arc_length: f32) -> f32 {
+        let sd = self.cuticle_peel_per_meter * arc_length;
+        let c = if sd < 1.0 { 1.0 - sd } else { 0.0 };
+        self.stiffness - CUTICLE_SHARE * self.stiffness * (1.0 - c)
+    }
+
+    /// The influences divided by their sum.
+    pub fn normalized_influences(&self) -> [f32; 4] {
+        let total: f32 = self.bond_influences.iter().sum();
+        self.bond_influences.map(|f| f / total)
+    }
+}
+
+/// How edge lengths are kept exactly (METHOD G: plain Gauss-Seidel PBD
+/// stretches under gravity).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Inextensibility {
+    /// Only the stretch/shear constraint (the papers' method).
+    Off,
+    /// After the constraint iterations, one root-to-tip Follow-The-Leader
+    /// pass (Mueller, Kim, Chentanez 2012) restores every rest length; the
+    /// velocity of vertex `i` is corrected by `-velocity_correction *
+    /// d_{i+1} / dt` (their DFTL) so the pass does not damp motion.
+    FollowTheLeader { velocity_correction: f32 },
+}
+
+impl Default for Inextensibility {
+    fn default() -> Self {
+        Inextensibility::FollowTheLeader {
+            velocity_correction: 0.9,
+        }
+    }
+}
+
+/// Solver settings (000 Table 1 and METHOD G).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SolverParameters {
+    /// Time step, seconds.
+    pub dt: f32,
+    /// Constraint iterations per step (`n` of (12)).
+    pub iterations: u32,
+    /// Gravity, m/s^2.
+    pub gravity: [f32; 3],
+    /// Hair radius `r`, metres: collision offset and hair-hair distance.
+    pub hair_radius: f32,
+    /// `alpha` of the hair-hair penalty (20); `None` switches it off.
+    pub hair_hair_strength: Option<f32>,
+    /// Velocity damping, per second (`v *= exp(-c dt)` each step).
+    pub linear_damping: f32,
+    /// Angular velocity damping, per second.
+    pub angular_damping: f32,
+    /// `w_q = scale * w_p / l^2` for each edge frame.
+    pub quaternion_mass_scale: f32,
+    pub inextensibility: Inextensibility,
+}
+
+impl Default for SolverParameters {
+    fn default() -> Self {
+        SolverParameters {
+            dt: 1.0 / 360.0,
+            iterations: 5,
+            gravity: [0.0, -9.8, 0.0],
+            hair_radius: 4.0e-5,
+            hair_hair_strength: None,
+            linear_damping: 2.0,
+            angular_damping: 2.0,
+            quaternion_mass_scale: 1.0,
+            inextensibility: Inextensibility::default(),
+        }
+    }
+}
+
+impl SolverParameters {
+    pub fn check(&self) -> Result<(), SimError> {
+        let fail = |name: &'static str, message: &str| {
+            Err(SimError::Parameter {
+                name,
+                message: message.to_string(),
+            })
+        };
+        if !(self.dt.is_finite() && self.dt > 0.0 && self.dt <= 1.0) {
+            return fail("dt", "must be in (0, 1] seconds");
+        }
+        if self.iterations == 0 || self.iterations > 1000 {
+            return fail("iterations", "must be between 1 and 1000");
+        }
+        if self.gravity.iter().any(|g| !g.is_finite()) {
+            return fail("gravity", "must be finite");
+        }
+        if !(self.hair_radius.is_finite() && self.hair_radius > 0.0) {
+            return fail("hair_radius", "must be a positive length");
+        }
+        if let Some(alpha) = self.hair_hair_strength {
+            if !(alpha.is_finite() && alpha >= 0.0) {
+                return fail("hair_hair_strength", "must be a non-negative number");
+            }
+        }
+        for (name, value) in [
+            ("linear_damping", self.linear_damping),
+            ("angular_damping", self.angular_damping),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return fail(name, "must be a non-negative rate per second");
+            }
+        }
+        if !(self.quaternion_mass_scale.is_finite() && self.quaternion_mass_scale > 0.0) {
+            return fail("quaternion_mass_scale", "must be positive");
+        }
+        if let Inextensibility::FollowTheLeader {
+            velocity_correction,
+        } = self.inextensibility
+        {
+            if !(velocity_correction.is_finite() && (0.0..=1.0).contains(&velocity_correction)) {
+                return fail("inextensibility.velocity_correction", "must be in [0, 1]");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Gravity of one step.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gravity {
+    /// `SolverParameters::gravity`.
+    #[default]
+    Default,
+    Off,
+    Vector([f32; 3]),
+}
+
+/// A blower, eq. (19) and (21).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Blower {
+    /// `p_blower`, metres.
+    pub from: [f32; 3],
+    /// `p_target`, metres.
+    pub to: [f32; 3],
+    /// `alpha` of (19), m/s^2.
+    pub strength: f32,
+    /// The factor of (21): `db_hyd = hydrogen_rate * |dv_w|` per step while
+    /// `b_hyd < 1` (0.003 in the paper's scene 2).
+    pub hydrogen_rate: f32,
+}
+
+/// What the world does to the hair during one step; the timeline fills it.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Environment<'a> {
+    pub gravity: Gravity,
+    pub blower: Option<Blower>,
+    /// `d b_j / dt` per bond kind, per second, applied at every joint as
+    /// `db = rate * dt` with `b` clamped to [0, 1]: positive re-forms (and
+    /// remembers the current shape, (17)), negative breaks.
+    pub bond_rate_drive: [f32; 4],
+    /// Per bond kind, a target rate: with `Some(t)` the drive's magnitude
+    /// moves every joint's rate toward `t` (up or down, stopping there);
+    /// with `None` the signed drive applies as it is.
+    pub bond_rate_targets: [Option<f32>; 4],
+    /// An extra acceleration per vertex (m/s^2, one per vertex of the
+    /// strand set, in its order): the wind hook.
+    pub extra_acceleration: Option<&'a [[f32; 3]]>,
+}
+
+/// Why the solver cannot start or go on.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SimError {
+    #[error("solver parameter '{name}': {message}")]
+    Parameter { name: &'static str, message: String },
+    #[error("groom: {0}")]
+    Groom(String),
+    #[error("groom strand {strand} vertex {vertex}: position is not finite")]
+    NonFinite { strand: usize, vertex: usize },
+    #[error("groom attribute '{name}': {message}")]
+    Attribute { name: String, message: String },
+    #[error("environment: {0}")]
+    Environment(String),
+    #[error("strand {strand} vertex {vertex}: {message}")]
+    Index {
+        strand: usize,
+        vertex: usize,
+        message: &'static str,
+    },
+}
+
+/// The benchmark's groom: `strands` straight strands of `vertices`
+/// vertices, 24 cm long, on a scalp cap (metres, Y up).
+pub fn bench_groom(
+    strands: usize,
+    vertices: usize,
+) -> Result<groom::Groom, crate::generate::GeneratorError> {
+    let length = 0.24;
+    crate::generate::generate(&crate::generate::GeneratorParameters {
+        strands,
+        length,
+        segment_length: length / (vertices.max(2) - 1) as f32,
+        ..Default::default()
+    })
+}
+
+/// What a step did besides moving the hair.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepReport {
+    /// Strands whose state turned non-finite during this step: restored to
+    /// their state before the step and frozen from now on.
+    pub contained: Vec<usize>,
+    /// All frozen strands so far.
+    pub frozen_total: usize,
+}

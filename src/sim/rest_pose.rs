@@ -1,0 +1,61 @@
+//! The plastic rest shape: what the hair would look like with no gravity
+//! and nothing touching it, rebuilt from the rest Darboux vectors (15) and
+//! rest lengths, integrating the frames from the fixed root to the tip.
+
+use super::bonds::rest_darboux;
+use super::math::{self, V3};
+use super::StrandSet;
+
+impl StrandSet {
+    /// `Omega_o` of (15) at every joint slot, from the current bonds and the
+    /// current shape (zero at the root and tip slots).
+    pub fn rest_darboux(&self) -> Vec<[f32; 3]> {
+        let mut out = vec![[0.0f32; 3]; self.vertex_count()];
+        for strand in 0..self.strand_count() {
+            if !self.simulated[strand] {
+                continue;
+            }
+            let (first, end) = (self.offsets[strand], self.offsets[strand + 1]);
+            for (j, slot) in out
+                .iter_mut()
+                .enumerate()
+                .take(end.saturating_sub(1))
+                .skip(first + 1)
+            {
+                let omega = math::darboux(self.edges[j - 1].rotation, self.edges[j].rotation);
+                let joint = &self.joints[j];
+                *slot = rest_darboux(omega, &joint.rates, &joint.memories, &self.influences);
+            }
+        }
+        out
+    }
+
+    /// The rest shape of every strand (per vertex, in the strands' order):
+    /// roots and root frames where they are now, each next frame the
+    /// previous one turned by the rest Darboux vector, each vertex one rest
+    /// length along its edge's tangent. Strands that are not simulated keep
+    /// their current points.
+    pub fn rest_pose(&self) -> Vec<[f32; 3]> {
+        let rest = self.rest_darboux();
+        let mut out = self.positions.clone();
+        for strand in 0..self.strand_count() {
+            if !self.simulated[strand] {
+                continue;
+            }
+            let (first, end) = (self.offsets[strand], self.offsets[strand + 1]);
+            let mut frame = self.edges[first].rotation;
+            let mut p: V3 = self.positions[first];
+            for e in first..end - 1 {
+                if e > first {
+                    frame = math::qnormalize(math::qmul(frame, math::from_imaginary(rest[e])));
+                }
+                p = math::add(
+                    p,
+                    math::scale(math::tangent(frame), self.edges[e].rest_length),
+                );
+                out[e + 1] = p;
+            }
+        }
+        out
+    }
+}

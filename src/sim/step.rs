@@ -1,0 +1,662 @@
+//! One step of 000 Fig. 1 (METHOD D), fused per strand: predict (external
+//! forces, bond-rate changes), rest shape from the bonds (15), `n`
+//! iterations of stretch/shear, bend/twist and collisions, the
+//! inextensibility pass, bond update (17), velocities from positions.
+//! Strands run in parallel; each works on a cache-resident copy of its
+//! state and commits it only if it is finite.
+
+use super::bonds::{reform, rest_darboux};
+use super::colliders::{project, PreparedCollider};
+use super::constraints::{
+    bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
+};
+use super::forces::{blower_dv, EdgeGrid};
+use super::lanes::{Group, LaneInput, LANES};
+use super::math::{self, Quat, V3};
+use super::quarantine::all_finite;
+use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
+use super::{
+    Blower, ColliderSet, Environment, Gravity, Inextensibility, SimError, SolverParameters,
+    StepReport, StrandSet,
+};
+use rayon::prelude::*;
+
+/// Advances strands; owns only scratch memory.
+#[derive(Debug)]
+pub struct Solver {
+    parameters: SolverParameters,
+    /// Groups of four in SIMD lanes (off only to test the scalar path).
+    simd: bool,
+    snapshot: Vec<V3>,
+    grid: EdgeGrid,
+}
+
+/// The mutable view of one strand's state.
+struct StrandMut<'a> {
+    index: usize,
+    active: bool,
+    root: RootAnchor,
+    first_vertex: usize,
+    positions: &'a mut [V3],
+    velocities: &'a mut [V3],
+    edges: &'a mut [EdgeState],
+    joints: &'a mut [JointState],
+    controls: &'a [VertexControl],
+}
+
+/// What every strand's step reads.
+struct Context<'a> {
+    dt: f32,
+    inv_dt: f32,
+    iterations: u32,
+    gravity: V3,
+    linear_keep: f32,
+    angular_keep: f32,
+    quaternion_mass_scale: f32,
+    radius: f32,
+    ftl: Option<f32>,
+    influences: [f32; 4],
+    drive: [f32; 4],
+    targets: [Option<f32>; 4],
+    blower: Option<Blower>,
+    extra_acceleration: Option<&'a [V3]>,
+    hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
+    colliders: &'a [PreparedCollider<'a>],
+    root_transform: Rigid,
+    simd: bool,
+}
+
+/// Per-thread working copy of one strand.
+#[derive(Default)]
+struct Work {
+    x: Vec<V3>,
+    p: Vec<V3>,
+    w: Vec<f32>,
+    q_old: Vec<Quat>,
+    q: Vec<Quat>,
+    w_q: Vec<f32>,
+    l: Vec<f32>,
+    rest: Vec<V3>,
+    stretch: Vec<StretchCoefficients>,
+    bend: Vec<[f32; 2]>,
+    db: Vec<[f32; 4]>,
+    corrections: Vec<V3>,
+    v: Vec<V3>,
+    omega: Vec<V3>,
+}
+
+impl Work {
+    fn resize(&mut self, n: usize) {
+        for v in [
+            &mut self.x,
+            &mut self.p,
+            &mut self.rest,
+            &mut self.corrections,
+            &mut self.v,
+            &mut self.omega,
+        ] {
+            v.resize(n, [0.0; 3]);
+        }
+        for v in [&mut self.w, &mut self.w_q, &mut self.l] {
+            v.resize(n, 0.0);
+        }
+        self.stretch.resize(n, StretchCoefficients::default());
+        self.bend.resize(n, [0.0; 2]);
+        self.q_old.resize(n, math::IDENTITY);
+        self.q.resize(n, math::IDENTITY);
+        self.db.resize(n, [0.0; 4]);
+    }
+}
+
+impl Solver {
+    pub fn new(parameters: SolverParameters) -> Result<Solver, SimError> {
+        parameters.check()?;
+        Ok(Solver {
+            parameters,
+            simd: true,
+            snapshot: Vec::new(),
+            grid: EdgeGrid::default(),
+        })
+    }
+
+    pub fn parameters(&self) -> &SolverParameters {
+        &self.parameters
+    }
+
+    /// Steps every strand alone (the scalar path), to check the SIMD path.
+    #[cfg(test)]
+    pub(crate) fn without_simd(mut self) -> Solver {
+        self.simd = false;
+        self
+    }
+
+    /// Changes the settings from the next step on (a stage may damp more,
+    /// iterate more, switch hair-hair off...).
+    pub fn set_parameters(&mut self, parameters: SolverParameters) -> Result<(), SimError> {
+        parameters.check()?;
+        self.parameters = parameters;
+        Ok(())
+    }
+
+    /// Advances every active strand by `dt`. Strands whose new state is not
+    /// finite keep their old state, are frozen and reported.
+    pub fn step(
+        &mut self,
+        strands: &mut StrandSet,
+        colliders: &ColliderSet,
+        environment: &Environment<'_>,
+    ) -> Result<StepReport, SimError> {
+        let parameters = self.parameters;
+        if let Some(extra) = environment.extra_acceleration {
+            if extra.len() != strands.vertex_count() {
+                return Err(SimError::Environment(format!(
+                    "extra_acceleration has {} values for {} vertices",
+                    extra.len(),
+                    strands.vertex_count()
+                )));
+            }
+        }
+        let targets_nan = environment
+            .bond_rate_targets
+            .iter()
+            .flatten()
+            .any(|t| t.is_nan());
+        if environment.bond_rate_drive.iter().any(|r| r.is_nan()) || targets_nan {
+            return Err(SimError::Environment("a bond rate drive is NaN".into()));
+        }
+        if let Some(b) = environment.blower {
+            let finite = math::is_finite3(b.from)
+                && math::is_finite3(b.to)
+                && b.strength.is_finite()
+                && b.hydrogen_rate.is_finite();
+            if !finite {
+                return Err(SimError::Environment(
+                    "the blower has a non-finite value".into(),
+                ));
+            }
+        }
+        let gravity = match environment.gravity {
+            Gravity::Default => parameters.gravity,
+            Gravity::Off => [0.0; 3],
+            Gravity::Vector(g) if math::is_finite3(g) => g,
+            Gravity::Vector(_) => {
+                return Err(SimError::Environment("gravity is not finite".into()));
+            }
+        };
+        if strands.prime_iterations != parameters.iterations {
+            let n = parameters.iterations as f32;
+            for joint in &mut strands.joints {
+                // (12): the effect of k does not depend on the iteration count.
+                joint.stiffness_prime = 1.0 - (1.0 - joint.stiffness).max(0.0).powf(1.0 / n);
+            }
+            strands.prime_iterations = parameters.iterations;
+        }
+        let active: Vec<bool> = strands
+            .simulated
+            .iter()
+            .zip(&strands.frozen)
+            .map(|(s, f)| *s && !*f)
+            .collect();
+        let hair_hair = match parameters.hair_hair_strength {
+            Some(alpha) if alpha > 0.0 => {
+                self.snapshot.clear();
+                self.snapshot.extend_from_slice(&strands.positions);
+                self.grid.build(
+                    &self.snapshot,
+                    &strands.offsets,
+                    &active,
+                    parameters.hair_radius,
+                );
+                Some(alpha)
+            }
+            _ => None,
+        };
+        let prepared = colliders.prepare(parameters.hair_radius);
+        let dt = parameters.dt;
+        let context = Context {
+            dt,
+            inv_dt: 1.0 / dt,
+            iterations: parameters.iterations,
+            gravity,
+            linear_keep: (-parameters.linear_damping * dt).exp(),
+            angular_keep: (-parameters.angular_damping * dt).exp(),
+            quaternion_mass_scale: parameters.quaternion_mass_scale,
+            radius: parameters.hair_radius,
+            ftl: match parameters.inextensibility {
+                Inextensibility::Off => None,
+                Inextensibility::FollowTheLeader {
+                    velocity_correction,
+                } => Some(velocity_correction),
+            },
+            influences: strands.influences,
+            drive: environment.bond_rate_drive.map(|r| r * dt),
+            targets: environment.bond_rate_targets,
+            blower: environment.blower,
+            extra_acceleration: environment.extra_acceleration,
+            hair_hair: hair_hair.map(|alpha| (alpha, &self.grid, self.snapshot.as_slice())),
+            colliders: &prepared,
+            root_transform: strands.root_transform,
+            simd: self.simd,
+        };
+        let mut views = split_strands(strands, &active);
+        // Strands of one vertex count next to each other so groups of four
+        // are uniform (SIMD) even in grooms of mixed lengths; the order is
+        // fixed by the data, and a strand's result does not depend on its
+        // group anyway.
+        views.sort_by_key(|v| (!v.active, v.positions.len(), v.index));
+        // Strands go in groups of four (see `step_group`); a strand's
+        // result does not depend on its group, so not on the thread count.
+        let failed: Vec<usize> = views
+            .into_par_iter()
+            .chunks(LANES)
+            .with_min_len(4)
+            .map_init(
+                || (std::array::from_fn(|_| Work::default()), Group::default()),
+                |(works, group), strands| step_group(&context, strands, works, group),
+            )
+            .flat_map_iter(|f| f.into_iter())
+            .collect();
+        let mut failed = failed;
+        failed.sort_unstable();
+        for &strand in &failed {
+            strands.frozen[strand] = true;
+        }
+        Ok(StepReport {
+            frozen_total: strands.frozen.iter().filter(|f| **f).count(),
+            contained: failed,
+        })
+    }
+}
+
+/// Cuts the flat arrays into one view per strand.
+fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandMut<'a>> {
+    let StrandSet {
+        offsets,
+        roots,
+        positions,
+        velocities,
+        edges,
+        joints,
+        controls,
+        ..
+    } = strands;
+    let mut positions = positions.as_mut_slice();
+    let mut velocities = velocities.as_mut_slice();
+    let mut edges = edges.as_mut_slice();
+    let mut joints = joints.as_mut_slice();
+    let mut controls = controls.as_slice();
+    let mut views = Vec::with_capacity(roots.len());
+    for (index, w) in offsets.windows(2).enumerate() {
+        let n = w[1] - w[0];
+        let (p, rest_p) = std::mem::take(&mut positions).split_at_mut(n);
+        let (v, rest_v) = std::mem::take(&mut velocities).split_at_mut(n);
+        let (e, rest_e) = std::mem::take(&mut edges).split_at_mut(n);
+        let (j, rest_j) = std::mem::take(&mut joints).split_at_mut(n);
+        let (c, rest_c) = controls.split_at(n);
+        positions = rest_p;
+        velocities = rest_v;
+        edges = rest_e;
+        joints = rest_j;
+        controls = rest_c;
+        views.push(StrandMut {
+            index,
+            active: active[index],
+            root: roots[index],
+            first_vertex: w[0],
+            positions: p,
+            velocities: v,
+            edges: e,
+            joints: j,
+            controls: c,
+        });
+    }
+    views
+}
+
+/// Fills the working copy: (ii) external forces and predicted positions
+/// and frames, bond-rate changes, (iii) rest shape from the bonds, the
+/// constraint coefficients.
+fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    let n = s.positions.len();
+    let m = n - 1;
+    work.resize(n);
+    let dt = ctx.dt;
+
+    // (ii) External forces, then the predicted positions.
+    for i in 0..n {
+        let x = s.positions[i];
+        work.x[i] = x;
+        work.db[i][0] = 0.0;
+        let mut blower_dv_here = [0.0f32; 3];
+        if let Some(blower) = &ctx.blower {
+            let edge = if i < m {
+                math::sub(s.positions[i + 1], x)
+            } else {
+                math::sub(x, s.positions[i - 1])
+            };
+            blower_dv_here = blower_dv(blower, x, edge, dt);
+            // (21): drying by the blower re-forms hydrogen bonds (held
+            // vertices dry too).
+            work.db[i][0] = blower.hydrogen_rate * math::length(blower_dv_here);
+        }
+        let control = s.controls[i];
+        if control.targeted {
+            work.p[i] = control.target;
+            work.w[i] = 0.0;
+            continue;
+        }
+        if i == 0 {
+            work.p[0] = ctx.root_transform.apply(s.root.position);
+            work.w[0] = 0.0;
+            continue;
+        }
+        work.w[i] = 1.0;
+        let mut a = ctx.gravity;
+        if let Some(extra) = ctx.extra_acceleration {
+            a = math::add(a, extra[s.first_vertex + i]);
+        }
+        let mut v = math::scale(
+            math::add(s.velocities[i], math::scale(a, dt)),
+            ctx.linear_keep,
+        );
+        v = math::add(v, blower_dv_here);
+        if let Some((alpha, grid, snapshot)) = ctx.hair_hair {
+            v = math::add(
+                v,
+                grid.penalty_dv(snapshot, x, s.index, ctx.radius, alpha, dt),
+            );
+        }
+        work.p[i] = math::add(x, math::scale(v, dt));
+    }
+    for e in 0..m {
+        let edge = s.edges[e];
+        work.q_old[e] = edge.rotation;
+        work.l[e] = edge.rest_length;
+        if e == 0 {
+            // The root frame is fixed to the scalp.
+            work.q[0] = math::qmul(ctx.root_transform.rotation, s.root.frame);
+            work.w_q[0] = 0.0;
+        } else {
+            let w = math::scale(edge.angular_velocity, ctx.angular_keep);
+            let q = edge.rotation;
+            work.q[e] = if w == [0.0; 3] {
+                // Renormalising a unit quaternion would only add round-off.
+                q
+            } else {
+                let spin = math::qmul(math::pure(w), q);
+                let h = 0.5 * dt;
+                math::qnormalize([
+                    q[0] + h * spin[0],
+                    q[1] + h * spin[1],
+                    q[2] + h * spin[2],
+                    q[3] + h * spin[3],
+                ])
+            };
+            work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+        }
+        work.stretch[e] =
+            StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
+    }
+
+    // Bond-rate changes and (iii) the rest shape from the bonds (15).
+    for j in 1..m {
+        let joint = &s.joints[j];
+        work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
+        let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
+        let mut effective = joint.rates;
+        let mut db = [0.0f32; 4];
+        for k in 0..4 {
+            let extra = if k == 0 { work.db[j][0] } else { 0.0 };
+            let b = joint.rates[k];
+            let driven = match ctx.targets[k] {
+                Some(goal) if b < goal => (b + ctx.drive[k].abs()).min(goal),
+                Some(goal) => (b - ctx.drive[k].abs()).max(goal),
+                None => b + ctx.drive[k],
+            };
+            let target = (driven + extra).clamp(0.0, 1.0);
+            db[k] = target - b;
+            // Breaking acts at once; re-forming takes effect at (v).
+            effective[k] = b.min(target);
+        }
+        work.db[j] = db;
+        work.rest[j] = rest_darboux(omega, &effective, &joint.memories, &ctx.influences);
+    }
+}
+
+/// Per-strand sweep state carried in registers: the current edge's first
+/// vertex and the previous edge's frame.
+struct Sweep {
+    p_a: V3,
+    q_prev: Quat,
+}
+
+impl Work {
+    /// Stretch/shear of edge 0 (no joint before it).
+    #[inline(always)]
+    fn sweep_begin(&mut self) -> Sweep {
+        let mut p_a = self.p[0];
+        let mut p_b = self.p[1];
+        let mut q_prev = self.q[0];
+        stretch_shear(&mut p_a, &mut p_b, &mut q_prev, &self.stretch[0]);
+        self.p[0] = p_a;
+        Sweep { p_a: p_b, q_prev }
+    }
+
+    /// Edge `e`'s stretch/shear, then the bend of the joint between edges
+    /// `e - 1` and `e` (Gauss-Seidel, root to tip).
+    #[inline(always)]
+    fn sweep_edge(&mut self, e: usize, state: &mut Sweep) {
+        let mut p_b = self.p[e + 1];
+        let mut q_e = self.q[e];
+        stretch_shear(&mut state.p_a, &mut p_b, &mut q_e, &self.stretch[e]);
+        bend_twist(&mut state.q_prev, &mut q_e, self.rest[e], self.bend[e]);
+        self.p[e] = state.p_a;
+        self.q[e - 1] = state.q_prev;
+        state.p_a = p_b;
+        state.q_prev = q_e;
+    }
+
+    #[inline(always)]
+    fn sweep_end(&mut self, m: usize, state: Sweep) {
+        self.p[m] = state.p_a;
+        self.q[m - 1] = state.q_prev;
+    }
+
+    fn sweep(&mut self, m: usize) {
+        let mut state = self.sweep_begin();
+        for e in 1..m {
+            self.sweep_edge(e, &mut state);
+        }
+        self.sweep_end(m, state);
+    }
+
+    /// Collision projection with friction after an iteration.
+    fn collide(&mut self, ctx: &Context<'_>, n: usize) {
+        if ctx.colliders.is_empty() {
+            return;
+        }
+        for i in 1..n {
+            if self.w[i] > 0.0 {
+                self.p[i] = project(
+                    ctx.colliders,
+                    self.p[i],
+                    Some(self.x[i]),
+                    ctx.radius,
+                    ctx.dt,
+                );
+            }
+        }
+    }
+}
+
+/// One strand's step. Returns false (and commits nothing) when its new
+/// state is not finite.
+fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+    let n = s.positions.len();
+    if n < 2 {
+        return true;
+    }
+    prepare(ctx, &s, work);
+    // (iv) Constraint iterations (and collisions).
+    for _ in 0..ctx.iterations {
+        work.sweep(n - 1);
+        work.collide(ctx, n);
+    }
+    finish(ctx, s, work, false)
+}
+
+/// Four strands' steps with their constraint sweeps in SIMD lanes when
+/// they are all active and of one vertex count (bit-identical to
+/// `step_strand` on each); otherwise one by one. Returns the failed ones.
+fn step_group(
+    ctx: &Context<'_>,
+    strands: Vec<StrandMut<'_>>,
+    works: &mut [Work; LANES],
+    group: &mut Group,
+) -> Vec<usize> {
+    let n = strands.first().map_or(0, |s| s.positions.len());
+    let uniform = ctx.simd
+        && strands.len() == LANES
+        && n >= 2
+        && strands.iter().all(|s| s.active && s.positions.len() == n);
+    let mut failed = Vec::new();
+    if !uniform {
+        for (s, work) in strands.into_iter().zip(works.iter_mut()) {
+            let index = s.index;
+            if s.active && !step_strand(ctx, s, work) {
+                failed.push(index);
+            }
+        }
+        return failed;
+    }
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        prepare(ctx, s, work);
+    }
+    let m = n - 1;
+    group.load_constants(lane_inputs(works, n), n);
+    let colliding = !ctx.colliders.is_empty();
+    for _ in 0..ctx.iterations {
+        group.sweep();
+        if colliding {
+            for (lane, work) in works.iter_mut().enumerate() {
+                group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+                work.collide(ctx, n);
+            }
+            group.load_state(&lane_inputs(works, n), n);
+        }
+    }
+    let ftl_done = ctx.ftl.is_some();
+    if ftl_done {
+        group.follow_the_leader();
+    }
+    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+        group.store(lane, &mut work.p[..n], &mut work.q[..m]);
+        if ftl_done {
+            group.store_corrections(lane, &mut work.corrections[..n]);
+        }
+        let index = s.index;
+        if !finish(ctx, s, work, ftl_done) {
+            failed.push(index);
+        }
+    }
+    failed
+}
+
+fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {
+    let m = n - 1;
+    std::array::from_fn(|l| LaneInput {
+        p: &works[l].p[..n],
+        q: &works[l].q[..m],
+        stretch: &works[l].stretch[..m],
+        rest: &works[l].rest[..m],
+        bend: &works[l].bend[..m],
+        w: &works[l].w[..n],
+        l: &works[l].l[..m],
+    })
+}
+
+/// After the iterations: inextensibility, final collisions, velocities,
+/// bond update (17); commits the strand if its new state is finite.
+/// `ftl_done`: the inextensibility pass already ran (in lanes).
+fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
+    let n = s.positions.len();
+    let m = n - 1;
+    let dt = ctx.dt;
+    let colliding = !ctx.colliders.is_empty();
+    if ctx.ftl.is_some() && !ftl_done {
+        follow_the_leader(
+            &mut work.p[..n],
+            &work.w[..n],
+            &work.l[..m],
+            &mut work.corrections[..n],
+        );
+    }
+    if colliding {
+        // Last, so no vertex ends inside a collider.
+        for i in 1..n {
+            if work.w[i] > 0.0 {
+                work.p[i] = project(ctx.colliders, work.p[i], None, ctx.radius, dt);
+            }
+        }
+    }
+
+    // (vi) Velocities from the position change.
+    for i in 0..n {
+        let mut v = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
+        if let Some(correction) = ctx.ftl {
+            if i + 1 < n && work.w[i] > 0.0 {
+                v = math::sub(
+                    v,
+                    math::scale(work.corrections[i + 1], correction * ctx.inv_dt),
+                );
+            }
+        }
+        work.v[i] = v;
+    }
+    for e in 0..m {
+        // Im(q conj(q_old)) = Im((q - q_old) conj(q_old)) since q_old
+        // conj(q_old) is real; the difference form avoids the round-off of
+        // a product of two nearly equal frames (noise in a soft system).
+        let (q, q_old) = (work.q[e], work.q_old[e]);
+        let sign = if math::qdot(q, q_old) < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        let change = [
+            q[0] - sign * q_old[0],
+            q[1] - sign * q_old[1],
+            q[2] - sign * q_old[2],
+            q[3] - sign * q_old[3],
+        ];
+        let delta = math::qmul(change, math::conj(q_old));
+        work.omega[e] = math::scale(math::imag(delta), 2.0 * sign * ctx.inv_dt);
+    }
+    if !all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m]) {
+        return false;
+    }
+
+    // (v) Bond update (17) with the shape after the projection; commit.
+    for j in 1..m {
+        let db = work.db[j];
+        let joint = &mut s.joints[j];
+        if db.iter().any(|d| *d > 0.0) {
+            let omega = math::darboux(work.q[j - 1], work.q[j]);
+            for ((memory, rate), d) in joint.memories.iter_mut().zip(&joint.rates).zip(&db) {
+                if *d > 0.0 {
+                    *memory = reform(*memory, *rate, *d, omega);
+                }
+            }
+        }
+        for (rate, d) in joint.rates.iter_mut().zip(&db) {
+            *rate = (*rate + d).clamp(0.0, 1.0);
+        }
+    }
+    s.positions.copy_from_slice(&work.p[..n]);
+    s.velocities.copy_from_slice(&work.v[..n]);
+    for e in 0..m {
+        s.edges[e].rotation = work.q[e];
+        s.edges[e].angular_velocity = work.omega[e];
+    }
+    true
+}

@@ -1,0 +1,45 @@
+//! `groombake bench`: the solver benchmark's command line and JSON.
+
+use crate::util::TestDir;
+
+#[test]
+fn bench_reports_ns_per_vertex_iteration_as_json() {
+    let dir = TestDir::new();
+    let output = dir.run_ok(&[
+        "bench",
+        "--strands",
+        "50",
+        "--vertices",
+        "16",
+        "--threads",
+        "2",
+        "--iterations",
+        "3",
+        "--steps",
+        "4",
+        "--json",
+    ]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&output.stdout).expect("bench prints one JSON object");
+    let ns = report["ns_per_vertex_iteration"]
+        .as_f64()
+        .expect("ns_per_vertex_iteration is a number");
+    assert!(ns > 0.0 && ns.is_finite(), "{report}");
+    assert_eq!(report["steps"], 4);
+    assert_eq!(report["threads"], 2);
+    assert_eq!(report["strands"], 50);
+    assert_eq!(report["vertices"], 16);
+    assert_eq!(report["iterations"], 3);
+}
+
+#[test]
+fn bench_refuses_bad_sizes() {
+    let dir = TestDir::new();
+    dir.run_fail(&["bench", "--vertices", "1"], 2);
+    dir.run_fail(&["bench", "--strands", "0", "--vertices", "8"], 2);
+    dir.run_fail(&["bench", "--threads", "0"], 2);
+    dir.run_fail(
+        &["bench", "--strands", "10000000", "--vertices", "10000"],
+        2,
+    );
+}

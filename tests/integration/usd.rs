@@ -1,0 +1,326 @@
+//! USD export and import through the real binary, and hand-off of every
+//! exported USD file to usd-core (`.ci/check_usd.py`).
+//!
+//! Expectation keys for the validator: `curves`, `points`, `first_point`,
+//! `meters_per_unit`, `up_axis`, `basis`, `time_samples`, and for animated
+//! files `start_time_code`, `end_time_code`, `time_codes_per_second`,
+//! `sample_points` (`[time code, point index, point]` items), plus
+//! `primvars` (name -> interpolation) and `widths` (interpolation).
+
+use crate::util::{hand_to_validators, shared_data, TestDir};
+use groom::{Attribute, AttributeValues, Frame, Groom, Units};
+use serde_json::json;
+
+/// Bangs_100 read straight from the `.hair` bytes (Cem Yuksel's layout),
+/// independently of the importers, as the reference the USD files must match.
+fn bangs() -> Groom {
+    let bytes = std::fs::read(shared_data("hairutil_Bangs_100.hair")).unwrap();
+    let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    let (strands, points, flags) = (u32_at(4) as usize, u32_at(8) as usize, u32_at(12));
+    let default_segments = u32_at(16);
+    assert_eq!(&bytes[..4], b"HAIR");
+    let mut at = 128;
+    let counts: Vec<u32> = if flags & 1 != 0 {
+        let counts = (0..strands)
+            .map(|i| u16::from_le_bytes([bytes[at + 2 * i], bytes[at + 2 * i + 1]]) as u32 + 1)
+            .collect();
+        at += 2 * strands;
+        counts
+    } else {
+        vec![default_segments + 1; strands]
+    };
+    assert!(flags & 2 != 0, "Bangs_100 has points");
+    let f32_at = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    let coordinates: Vec<[f32; 3]> = (0..points)
+        .map(|i| {
+            [
+                f32_at(at + 12 * i),
+                f32_at(at + 12 * i + 4),
+                f32_at(at + 12 * i + 8),
+            ]
+        })
+        .collect();
+    let groom = Groom {
+        strand_vertex_counts: counts,
+        points: coordinates,
+        units: Units::CENTIMETERS,
+        ..Groom::default()
+    };
+    assert!(groom.validate().is_empty());
+    groom
+}
+
+fn first_point(groom: &Groom) -> serde_json::Value {
+    json!(groom.points[0])
+}
+
+#[test]
+fn bangs_to_usda_and_usdc_keeps_every_point() {
+    let dir = TestDir::new();
+    let reference = bangs();
+    assert_eq!(reference.strand_count(), 100);
+    assert_eq!(reference.vertex_count(), 1165);
+    let source = shared_data("hairutil_Bangs_100.hair");
+    let source = source.to_str().unwrap();
+    dir.run_ok(&["convert", source, "bangs.usda"]);
+    dir.run_ok(&["convert", source, "bangs.usdc"]);
+    // Crate back to text gives the same bytes as the direct conversion.
+    dir.run_ok(&["convert", "bangs.usdc", "bangs_again.usda"]);
+    assert_eq!(
+        std::fs::read(dir.path("bangs.usda")).unwrap(),
+        std::fs::read(dir.path("bangs_again.usda")).unwrap(),
+        "usda -> usdc -> usda is byte-identical"
+    );
+    for name in ["bangs.usda", "bangs.usdc"] {
+        let summary = dir.inspect(name);
+        assert_eq!(summary["strands"], 100, "{name}");
+        assert_eq!(summary["vertices"], 1165, "{name}");
+        assert_eq!(summary["units"], "cm", "{name}");
+        assert_eq!(summary["first_point"], first_point(&reference), "{name}");
+        let back = importers::read(&dir.path(name)).unwrap();
+        assert_eq!(back.points, reference.points, "{name}: same coordinates");
+        assert_eq!(back.strand_vertex_counts, reference.strand_vertex_counts);
+        hand_to_validators(
+            &dir.path(name),
+            &format!("usd_bangs_{}", name.replace('.', "_")),
+            json!({
+                "curves": 100,
+                "points": 1165,
+                "first_point": first_point(&reference),
+                "meters_per_unit": 0.01,
+                "up_axis": "Y",
+                "basis": "linear",
+                "time_samples": 0,
+            }),
+        );
+    }
+}
+
+fn animated_groom(frames: usize) -> Groom {
+    let mut groom = Groom::from_strands([
+        vec![[0.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, -2.0, 0.0]],
+        vec![
+            [1.0, 0.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, -2.0, 0.0],
+            [1.0, -3.0, 0.0],
+        ],
+    ]);
+    groom.units = Units::METERS;
+    groom.set_attribute(Attribute::new(
+        "width",
+        AttributeValues::Float(vec![0.01; 7]),
+    ));
+    groom.set_attribute(Attribute::new(
+        "wetness",
+        AttributeValues::Float((0..7).map(|i| i as f32 / 7.0).collect()),
+    ));
+    groom.set_attribute(Attribute::per_strand(
+        "root_uv",
+        AttributeValues::Vec2(vec![[0.25, 0.5], [0.75, 0.5]]),
+    ));
+    groom.set_attribute(Attribute::per_strand(
+        "hydrogen_bonds",
+        AttributeValues::Float(vec![0.35, 0.3]),
+    ));
+    for i in 0..frames {
+        let sway = i as f32 * 0.05;
+        groom.frames.push(Frame {
+            time: i as f64 / 24.0,
+            points: groom
+                .points
+                .iter()
+                .map(|p| [p[0] + sway * -p[1], p[1], p[2]])
+                .collect(),
+        });
+    }
+    groom
+}
+
+/// A bake streamed frame by frame to `.usdc` has one time sample per frame.
+#[test]
+fn animated_usdc_has_one_time_sample_per_frame() {
+    let dir = TestDir::new();
+    let frames = 12;
+    let groom = animated_groom(frames);
+    let mut rest = groom.clone();
+    rest.frames.clear();
+    let options = exporters::AnimationOptions {
+        fps: 24.0,
+        frame_count: frames,
+    };
+    let mut writer = exporters::animated(&dir.path("bake.usdc"), &rest, options).unwrap();
+    for frame in &groom.frames {
+        writer.write_frame(frame).unwrap();
+    }
+    writer.finish().unwrap();
+
+    let summary = dir.inspect("bake.usdc");
+    assert_eq!(summary["frames"], frames);
+    let back = importers::read(&dir.path("bake.usdc")).unwrap();
+    // Exact times from the library (serde_json's float parsing may be off
+    // by an ulp, so the CLI's JSON is not compared bit for bit).
+    let times: Vec<f64> = back.frames.iter().map(|f| f.time).collect();
+    let expected: Vec<f64> = (0..frames).map(|i| i as f64 / 24.0).collect();
+    assert_eq!(times, expected);
+    assert_eq!(summary["frame_times"].as_array().unwrap().len(), frames);
+    for (read, written) in back.frames.iter().zip(&groom.frames) {
+        assert_eq!(read.points, written.points);
+    }
+    // The text form carries the same samples.
+    dir.run_ok(&["convert", "bake.usdc", "bake.usda"]);
+    assert_eq!(dir.inspect("bake.usda")["frames"], frames);
+
+    let samples: Vec<_> = groom
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| json!([i as f64, 6, f.points[6]]))
+        .collect();
+    for name in ["bake.usdc", "bake.usda"] {
+        hand_to_validators(
+            &dir.path(name),
+            &format!("usd_animated_{}", name.replace('.', "_")),
+            json!({
+                "curves": 2,
+                "points": 7,
+                "first_point": groom.points[0],
+                "meters_per_unit": 1.0,
+                "up_axis": "Y",
+                "basis": "linear",
+                "time_samples": frames,
+                "start_time_code": 0.0,
+                "end_time_code": (frames - 1) as f64,
+                "time_codes_per_second": 24.0,
+                "sample_points": samples,
+                "widths": "vertex",
+                "primvars": {
+                    "st": "uniform",
+                    "wetness": "vertex",
+                    "hydrogen_bonds": "uniform",
+                },
+            }),
+        );
+    }
+}
+
+#[test]
+fn blender_usda_imports_every_curve_with_its_transform() {
+    let dir = TestDir::new();
+    let source = shared_data("blender501_hair.usda");
+    let source = source.to_str().unwrap();
+    let summary = dir.inspect(source);
+    assert_eq!(summary["format"], "usd");
+    assert_eq!(summary["strands"], 5, "3 HairData + 2 PolyData curves");
+    assert_eq!(summary["vertices"], 20, "12 + 8 points");
+    assert_eq!(
+        summary["first_point"],
+        json!([0.0, 0.0, 1.0]),
+        "Hair's translate (0, 0, 1)"
+    );
+    assert_eq!(summary["basis"], "catmull_rom");
+    assert_eq!(summary["units"], "m");
+    assert_eq!(summary["up_axis"], "Z");
+    let names: Vec<&str> = summary["attributes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["name"].as_str().unwrap())
+        .collect();
+    for name in ["width", "tilt", "group_id", "curve_basis"] {
+        assert!(names.contains(&name), "{name} in {names:?}");
+    }
+    dir.run_ok(&["convert", source, "blender.usdc"]);
+    hand_to_validators(
+        &dir.path("blender.usdc"),
+        "usd_blender_converted_usdc",
+        json!({
+            "curves": 5,
+            "points": 20,
+            "first_point": [0.0, 0.0, 1.0],
+            "meters_per_unit": 1.0,
+            "up_axis": "Z",
+            "basis": "catmullRom",
+            "time_samples": 0,
+            "widths": "vertex",
+            "primvars": {"tilt": "vertex", "group_id": "uniform", "curve_basis": "uniform"},
+        }),
+    );
+}
+
+#[test]
+fn malformed_usd_exits_2_with_the_place() {
+    let dir = TestDir::new();
+    std::fs::write(
+        dir.path("bad.usda"),
+        "#usda 1.0\ndef BasisCurves \"C\"\n{\n    int[] curveVertexCounts = [2, oops]\n}\n",
+    )
+    .unwrap();
+    let stderr = dir.run_fail(&["inspect", "bad.usda"], 2);
+    assert_eq!(
+        stderr.trim_end(),
+        "groombake: bad.usda:4:35: expected a number, found 'oops'"
+    );
+
+    exporters::write(&dir.path("good.usdc"), &bangs()).unwrap();
+    let bytes = std::fs::read(dir.path("good.usdc")).unwrap();
+    std::fs::write(dir.path("cut.usdc"), &bytes[..bytes.len() / 2]).unwrap();
+    let stderr = dir.run_fail(&["inspect", "cut.usdc"], 2);
+    assert!(
+        stderr.starts_with("groombake: cut.usdc:offset "),
+        "{stderr}"
+    );
+
+    let mut wrong = bytes.clone();
+    wrong[..8].copy_from_slice(b"PXR-USDX");
+    std::fs::write(dir.path("wrong.usd"), &wrong).unwrap();
+    let stderr = dir.run_fail(&["convert", "wrong.usd", "out.usda"], 2);
+    assert!(
+        stderr.contains("wrong.usd:offset 0: not a USD file"),
+        "{stderr}"
+    );
+    assert!(!dir.path("out.usda").exists());
+}
+
+/// A file written by usd-core (compressed arrays, nested transforms, two
+/// curves prims of different bases, time samples at 30 codes per second)
+/// goes through import and export and comes out valid.
+#[test]
+fn usd_core_file_converts_to_valid_usd() {
+    let dir = TestDir::new();
+    let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("importers/tests/data/reference.usdc");
+    let source = source.to_str().unwrap();
+    let summary = dir.inspect(source);
+    assert_eq!(summary["strands"], 21);
+    assert_eq!(summary["vertices"], 204);
+    assert_eq!(summary["frames"], 3);
+    for name in ["reference.usda", "reference.usdc"] {
+        dir.run_ok(&["convert", source, name]);
+        let back = dir.inspect(name);
+        assert_eq!(back["vertices"], 204, "{name}");
+        assert_eq!(back["frames"], 3, "{name}");
+        hand_to_validators(
+            &dir.path(name),
+            &format!("usd_from_usd_core_{}", name.replace('.', "_")),
+            json!({
+                "curves": 21,
+                "points": 204,
+                "first_point": summary["first_point"],
+                "meters_per_unit": 0.01,
+                "up_axis": "Z",
+                "basis": "bspline",
+                "time_samples": 3,
+                "widths": "vertex",
+                "primvars": {
+                    "wetness": "vertex",
+                    "clump": "uniform",
+                    "st": "uniform",
+                    "level": "uniform",
+                    "tint": "uniform",
+                    "group_id": "uniform",
+                },
+            }),
+        );
+    }
+}
