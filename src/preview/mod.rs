@@ -7,6 +7,7 @@
 mod camera;
 mod font;
 mod raster;
+mod shadow;
 
 pub use camera::Camera;
 
@@ -522,6 +523,38 @@ impl<'o> Scene<'o> {
         let depth_span = (far - near).max(1e-9);
         let range = self.range;
         let hair = self.options.hair_color;
+        let default_width = default_width(groom);
+        let width_of = |strand: usize, i: usize| {
+            widths
+                .as_ref()
+                .and_then(|(values, per_strand)| {
+                    values.get(if *per_strand { strand } else { i }).copied()
+                })
+                .filter(|w| w.is_finite() && *w >= 0.0)
+                .unwrap_or(default_width)
+        };
+        let y_up: Vec<Vec3> = points.par_iter().map(|&p| up.to_y_up(p)).collect();
+        // The hair area each vertex stands for: its width times half of each
+        // segment it ends.
+        let cross_sections: Vec<f32> = (0..strand_of.len())
+            .into_par_iter()
+            .map(|i| {
+                let strand = strand_of[i] as usize;
+                let (Some(&start), Some(&end)) = (offsets.get(strand), offsets.get(strand + 1))
+                else {
+                    return 0.0;
+                };
+                let at = |j: usize| y_up.get(j).copied();
+                let half_length = |j: usize, k: usize| match (at(j), at(k)) {
+                    (Some(a), Some(b)) if j != k => 0.5 * dot(sub(b, a), sub(b, a)).sqrt(),
+                    _ => 0.0,
+                };
+                let length = half_length(i.saturating_sub(1).max(start), i)
+                    + half_length(i, (i + 1).min(end.saturating_sub(1)));
+                width_of(strand, i) * length
+            })
+            .collect();
+        let key_light = shadow::key_light(&y_up, &cross_sections, lights.key);
         let mut vertices = vec![ScreenVertex::INVALID; strand_of.len()];
         vertices.par_iter_mut().enumerate().for_each(|(i, vertex)| {
             let Some(&strand) = strand_of.get(i) else {
@@ -531,7 +564,7 @@ impl<'o> Scene<'o> {
             let (Some(&start), Some(&end)) = (offsets.get(strand), offsets.get(strand + 1)) else {
                 return;
             };
-            let point = |j: usize| points.get(j).map(|&p| up.to_y_up(p));
+            let point = |j: usize| y_up.get(j).copied();
             let Some(p) = point(i) else {
                 return;
             };
@@ -566,17 +599,12 @@ impl<'o> Scene<'o> {
             };
             let depth_cue = 1.0 - 0.45 * ((projected.depth - near) / depth_span).clamp(0.0, 1.0);
             // Roots sit under the other hair: darker.
-            let root_shade = 0.55 + 0.45 * smoothstep(0.0, 0.3, along);
+            let root_shade = 0.7 + 0.3 * smoothstep(0.0, 0.3, along);
             let occlusion = depth_cue * root_shade;
             let view = camera.toward_eye(p);
-            let color = lights.shade(tangent, view, base, occlusion, colors.is_some());
-            let width = widths
-                .as_ref()
-                .and_then(|(values, per_strand)| {
-                    values.get(if *per_strand { strand } else { i }).copied()
-                })
-                .filter(|w| w.is_finite() && *w >= 0.0)
-                .unwrap_or(default_width(groom));
+            let lit = key_light.get(i).copied().unwrap_or(1.0);
+            let color = lights.shade(tangent, view, base, occlusion, lit, colors.is_some());
+            let width = width_of(strand, i);
             *vertex = ScreenVertex {
                 x: projected.x,
                 y: projected.y,
@@ -753,6 +781,7 @@ impl Lights {
         view: Vec3,
         base: [f32; 3],
         occlusion: f32,
+        key_light: f32,
         mapped: bool,
     ) -> [f32; 3] {
         let kk = |light: Vec3, exponent: f32| {
@@ -770,7 +799,7 @@ impl Lights {
         let (_, rim_specular) = kk(self.rim, 20.0);
         // Mapped colours keep more ambient light so the ramp stays legible.
         let ambient = if mapped { 0.35 } else { 0.12 };
-        let diffuse = ambient + 0.85 * key_diffuse + 0.3 * fill_diffuse;
+        let diffuse = ambient + 0.85 * key_light * key_diffuse + 0.3 * fill_diffuse;
         let specular_strength = if mapped { 0.12 } else { 0.2 };
         // The sharp highlight is a warm white (light reflected at the cuticle);
         // the broad one and the rim carry the hair's own colour (light that
@@ -778,8 +807,8 @@ impl Lights {
         const HIGHLIGHT: [f32; 3] = [1.0, 0.9, 0.8];
         let mut color = [0.0; 3];
         for ((c, b), h) in color.iter_mut().zip(base).zip(HIGHLIGHT) {
-            *c = (b * (diffuse + 0.5 * key_broad + 0.8 * rim_specular)
-                + specular_strength * h * key_specular)
+            *c = (b * (diffuse + 0.5 * key_light * key_broad + 0.8 * rim_specular)
+                + specular_strength * h * key_light * key_specular)
                 * occlusion;
         }
         color
