@@ -12,4 +12,6 @@ mod bench;
 mod cli;
 mod formats;
 mod golden;
+mod inspect;
+mod roundtrip;
 mod usd;
