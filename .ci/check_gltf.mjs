@@ -58,10 +58,12 @@ for (const name of files) {
     continue;
   }
   const { numErrors, numWarnings, numInfos, numHints } = report.issues;
+  // A file the validator cannot parse (e.g. a truncated GLB) has no info.
+  const info = report.info ?? {};
   console.log(
     `${name}: ${numErrors} errors, ${numWarnings} warnings, ${numInfos} infos, ${numHints} hints` +
-      ` (${report.info.drawCallCount} primitives, ${report.info.totalVertexCount} vertices,` +
-      ` ${report.info.animationCount} animations)`,
+      ` (${info.drawCallCount} primitives, ${info.totalVertexCount} vertices,` +
+      ` ${info.animationCount} animations)`,
   );
   const severities = ["error", "warning", "info", "hint"];
   for (const message of report.issues.messages) {
@@ -79,7 +81,7 @@ for (const name of files) {
         problems.push(`unknown expectation key '${key}'`);
         continue;
       }
-      const got = read(report.info);
+      const got = read(info);
       if (got !== want) {
         problems.push(`${key}: expected ${JSON.stringify(want)}, found ${JSON.stringify(got)}`);
       }

@@ -12,5 +12,7 @@ mod bench;
 mod cli;
 mod formats;
 mod golden;
+mod inspect;
 mod preview;
+mod roundtrip;
 mod usd;

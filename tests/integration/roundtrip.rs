@@ -1,0 +1,227 @@
+//! Issue 2's round trip over every format pair: a groom with strands of
+//! different lengths, a per-vertex `width` and a per-strand `root_uv` is
+//! written to every format, read back, written to every other format and
+//! read back again. Counts and points must survive everywhere (to f32
+//! precision after the unit conversions each format makes), and each
+//! attribute wherever both formats of the pair can hold it.
+
+use crate::util::{hand_to_validators, TestDir};
+use groom::{Attribute, AttributeValues, Groom, Units, UpAxis};
+use serde_json::json;
+use std::path::Path;
+
+const FORMATS: [&str; 8] = ["hair", "data", "obj", "glb", "gltf", "usda", "usdc", "abc"];
+
+/// Formats whose files say nothing about units: the reader takes them as
+/// centimetres, so a test states the writer's units as `convert
+/// --source-units` would.
+const UNITLESS: [&str; 3] = ["hair", "data", "obj"];
+
+/// The formats that hold each attribute of the test groom.
+fn holds(format: &str, attribute: &str) -> bool {
+    match attribute {
+        "width" => matches!(format, "hair" | "glb" | "gltf" | "usda" | "usdc" | "abc"),
+        "root_uv" => matches!(format, "glb" | "gltf" | "usda" | "usdc" | "abc"),
+        _ => false,
+    }
+}
+
+/// Five strands of 2 to 9 points, in centimetres, Y up, with coordinates
+/// that are not round in binary or decimal.
+fn test_groom() -> Groom {
+    let lengths = [2usize, 5, 9, 3, 7];
+    let strands: Vec<Vec<[f32; 3]>> = lengths
+        .iter()
+        .enumerate()
+        .map(|(s, &n)| {
+            let root = [
+                -4.3 + 2.17 * s as f32,
+                160.0 + 0.731 * s as f32,
+                -1.9 + 0.37 * (s * s) as f32,
+            ];
+            (0..n)
+                .map(|i| {
+                    let t = i as f32;
+                    [
+                        root[0] + 0.113 * t * t,
+                        root[1] - 1.37 * t,
+                        root[2] + 0.29 * t.sin() + 0.001 * s as f32,
+                    ]
+                })
+                .collect()
+        })
+        .collect();
+    let mut groom = Groom::from_strands(&strands);
+    groom.units = Units::CENTIMETERS;
+    groom.up_axis = UpAxis::Y;
+    let vertices = groom.vertex_count();
+    groom.set_attribute(Attribute::new(
+        "width",
+        AttributeValues::Float(
+            (0..vertices)
+                .map(|i| 0.0081 - 0.0002 * (i % 11) as f32)
+                .collect(),
+        ),
+    ));
+    groom.set_attribute(Attribute::per_strand(
+        "root_uv",
+        AttributeValues::Vec2(
+            (0..lengths.len())
+                .map(|s| [0.125 + 0.17 * s as f32, 0.9 - 0.21 * s as f32])
+                .collect(),
+        ),
+    ));
+    groom
+}
+
+/// Reads a file of format `ext` that was written from a groom in `written_in`
+/// units, and brings it to the test groom's centimetres, Y up.
+fn read_back(path: &Path, ext: &str, written_in: Units) -> Groom {
+    let mut groom =
+        importers::read(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
+    if UNITLESS.contains(&ext) {
+        groom.units = written_in;
+    }
+    groom.convert_to(Units::CENTIMETERS, UpAxis::Y);
+    groom
+}
+
+/// Whether `got` is `want` to a few f32 ulps of relative error (each unit
+/// conversion rounds once; a round trip through two formats makes several).
+fn close(got: f32, want: f32, floor: f32) -> bool {
+    (got - want).abs() <= 16.0 * f32::EPSILON * want.abs().max(floor)
+}
+
+fn check(original: &Groom, back: &Groom, attributes: &[&str], context: &str) {
+    assert_eq!(
+        back.strand_vertex_counts, original.strand_vertex_counts,
+        "{context}: strand vertex counts"
+    );
+    assert_eq!(back.points.len(), original.points.len(), "{context}");
+    assert_eq!(back.basis, original.basis, "{context}: basis");
+    assert!(back.frames.is_empty(), "{context}: frames appeared");
+    for (i, (got, want)) in back.points.iter().zip(&original.points).enumerate() {
+        assert!(
+            (0..3).all(|k| close(got[k], want[k], 1.0)),
+            "{context}: point {i} is {got:?}, expected {want:?}"
+        );
+    }
+    for &name in attributes {
+        let want = original.attribute(name).unwrap();
+        let got = back
+            .attribute(name)
+            .unwrap_or_else(|| panic!("{context}: attribute {name} lost"));
+        assert_eq!(got.scope, want.scope, "{context}: scope of {name}");
+        let (got_values, want_values) = (got.values.to_f32_flat(), want.values.to_f32_flat());
+        assert_eq!(
+            got.values.type_name(),
+            want.values.type_name(),
+            "{context}: type of {name}"
+        );
+        assert_eq!(got_values.len(), want_values.len(), "{context}: {name}");
+        for (i, (&g, &w)) in got_values.iter().zip(&want_values).enumerate() {
+            // Widths are tiny: compare them relative to themselves.
+            assert!(
+                close(g, w, f32::MIN_POSITIVE),
+                "{context}: {name} value {i} is {g}, expected {w}"
+            );
+        }
+    }
+}
+
+/// What the validator of `ext` must find in a file holding the test groom;
+/// `None` for the formats no validator checks.
+fn expectation(
+    ext: &str,
+    groom: &Groom,
+    units: Units,
+    widths: bool,
+    root_uv: bool,
+) -> Option<serde_json::Value> {
+    let strands = groom.strand_count();
+    let vertices = groom.vertex_count();
+    match ext {
+        "glb" | "gltf" => Some(json!({"kind": "gltf", "primitives": 1, "vertices": vertices})),
+        "usda" | "usdc" => {
+            let mut expect = json!({
+                "curves": strands,
+                "points": vertices,
+                "basis": "linear",
+                "up_axis": "Y",
+                "meters_per_unit": units.meters_per_unit,
+            });
+            if widths {
+                expect["widths"] = json!("vertex");
+            }
+            if root_uv {
+                expect["primvars"] = json!({"st": "uniform"});
+            }
+            Some(expect)
+        }
+        "abc" => {
+            let mut expect = json!({
+                "kind": "abc",
+                "curves": strands,
+                "points": vertices,
+                "samples": 1,
+                "basis": "linear",
+            });
+            if widths {
+                expect["width"] = json!("vertex");
+            }
+            Some(expect)
+        }
+        _ => None,
+    }
+}
+
+#[test]
+fn every_format_pair_round_trips_points_and_attributes() {
+    let dir = TestDir::new();
+    let original = test_groom();
+    assert!(original.validate().iter().all(|p| !p.is_fatal()));
+    for a in FORMATS {
+        let first = dir.path(&format!("first.{a}"));
+        exporters::write(&first, &original)
+            .unwrap_or_else(|e| panic!("writing {}: {e}", first.display()));
+        // As read, in the file's own units: what the next writer gets.
+        let mut through_a = importers::read(&first).unwrap();
+        if UNITLESS.contains(&a) {
+            through_a.units = original.units;
+        }
+        let kept: Vec<&str> = ["width", "root_uv"]
+            .into_iter()
+            .filter(|name| holds(a, name))
+            .collect();
+        let mut normalised = through_a.clone();
+        normalised.convert_to(Units::CENTIMETERS, UpAxis::Y);
+        check(&original, &normalised, &kept, a);
+
+        for b in FORMATS.into_iter().filter(|&b| b != a) {
+            let context = format!("{a} -> {b}");
+            let second = dir.path(&format!("{a}_to_{b}.{b}"));
+            exporters::write(&second, &through_a)
+                .unwrap_or_else(|e| panic!("{context}: writing: {e}"));
+            let back = read_back(&second, b, through_a.units);
+            let both: Vec<&str> = kept.iter().copied().filter(|n| holds(b, n)).collect();
+            check(&original, &back, &both, &context);
+            // A few of the second-generation files, for the external validators.
+            let handed = matches!(
+                (a, b),
+                ("gltf", "abc")
+                    | ("abc", "usda")
+                    | ("usdc", "glb")
+                    | ("hair", "usdc")
+                    | ("usda", "gltf")
+            );
+            if handed {
+                let has = |n: &str| both.contains(&n);
+                if let Some(expect) =
+                    expectation(b, &original, through_a.units, has("width"), has("root_uv"))
+                {
+                    hand_to_validators(&second, &format!("roundtrip_{a}_to_{b}"), expect);
+                }
+            }
+        }
+    }
+}
