@@ -315,18 +315,41 @@ fn write_sheet(
         })
         .collect();
     let image = crate::preview::render_sheet(&entries, &options)?;
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent).map_err(|source| BakeError::Io {
-            file: path.to_path_buf(),
-            source,
-        })?;
-    }
+    create_parent(path)?;
     crate::preview::write_png(&image, path)?;
     Ok(())
 }
 
-fn solver_for(parameters: SolverParameters) -> Result<Solver, BakeError> {
-    Ok(Solver::new(parameters)?)
+/// Creates the folder an output goes into.
+fn create_parent(path: &Path) -> Result<(), BakeError> {
+    match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => {
+            std::fs::create_dir_all(parent).map_err(|source| BakeError::Io {
+                file: path.to_path_buf(),
+                source,
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The report line of a written output: its size and SHA-256.
+fn output_report(
+    path: &Path,
+    what: String,
+    frames: Option<usize>,
+) -> Result<OutputReport, BakeError> {
+    let (bytes, sha256) = size_and_sha256(path).map_err(|source| BakeError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    Ok(OutputReport {
+        path: path.display().to_string(),
+        what,
+        bytes,
+        sha256,
+        frames,
+    })
 }
 
 /// Lets go of every kinematic target (rods, holds): nothing holds the hair.
@@ -452,12 +475,7 @@ fn bake_in_pool(
         let mut base = groom_now(&groom, &strands, strands.positions().to_vec(), false);
         base.convert_to(units, up);
         let path = output_path(options, e.path.get_ref());
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(|source| BakeError::Io {
-                file: path.clone(),
-                source,
-            })?;
-        }
+        create_parent(&path)?;
         let writer = exporters::animated(
             &path,
             &base,
@@ -548,7 +566,7 @@ fn bake_in_pool(
             stage_parameters.linear_damping = d.linear;
             stage_parameters.angular_damping = d.angular;
         }
-        let mut solver = solver_for(stage_parameters)?;
+        let mut solver = Solver::new(stage_parameters)?;
         if plan.release_targets {
             release_kinematic_targets(&mut strands)?;
         }
@@ -648,40 +666,20 @@ fn bake_in_pool(
                 ExportWhat::Animated => continue,
             };
             out.convert_to(units, up);
-            if let Some(parent) = path.parent() {
-                std::fs::create_dir_all(parent).map_err(|source| BakeError::Io {
-                    file: path.clone(),
-                    source,
-                })?;
-            }
+            create_parent(&path)?;
             exporters::write(&path, &out)?;
         }
-        let (bytes, sha256) = size_and_sha256(&path).map_err(|source| BakeError::Io {
-            file: path.clone(),
-            source,
-        })?;
-        report.outputs.push(OutputReport {
-            path: path.display().to_string(),
-            what: format!("{:?}", e.what).to_lowercase(),
-            bytes,
-            sha256,
-            frames: frames_of[index],
-        });
+        let what = format!("{:?}", e.what).to_lowercase();
+        report
+            .outputs
+            .push(output_report(&path, what, frames_of[index])?);
     }
     if let (Some(preview), false) = (&timeline.file.preview, options.dry) {
         let path = output_path(options, preview.sheet.get_ref());
         write_sheet(timeline, &snapshots, &path)?;
-        let (bytes, sha256) = size_and_sha256(&path).map_err(|source| BakeError::Io {
-            file: path.clone(),
-            source,
-        })?;
-        report.outputs.push(OutputReport {
-            path: path.display().to_string(),
-            what: "sheet".into(),
-            bytes,
-            sha256,
-            frames: None,
-        });
+        report
+            .outputs
+            .push(output_report(&path, "sheet".into(), None)?);
     }
     report.simulated_seconds = total_time;
     report.wall_seconds = started.elapsed().as_secs_f64();

@@ -301,10 +301,17 @@ fn bake_writes_a_sheet_before_and_after_each_stage_and_preview_draws_a_timeline(
     // under a label strip.
     let (w, h) = png_size(&dir.path("sheet.png"));
     assert!(w >= 3 * 64 && h > 48, "sheet is {w}x{h}");
-    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.path("r.json")).unwrap()).unwrap();
-    assert!(report["outputs"].as_array().unwrap().iter().any(|o| o["what"] == "sheet"));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("r.json")).unwrap()).unwrap();
+    assert!(report["outputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|o| o["what"] == "sheet"));
 
-    dir.run_ok(&["preview", "t.toml", "-o", "p.png", "--size", "40x40", "--frame", "2"]);
+    dir.run_ok(&[
+        "preview", "t.toml", "-o", "p.png", "--size", "40x40", "--frame", "2",
+    ]);
     let (w, h) = png_size(&dir.path("p.png"));
     assert!((40..80).contains(&w) && h > 40, "one snapshot is {w}x{h}");
     let e = dir.run_fail(&["preview", "t.toml", "-o", "q.png", "--frame", "9"], 2);
