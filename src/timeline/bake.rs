@@ -584,6 +584,12 @@ fn bake_in_pool(
             let t_end = global_time + (local_step + 1) as f64 * dt;
             // Kinematic colliders: the pose at the end of the step, with
             // the velocity that gets them there (friction drags hair along).
+            if !timeline.file.groom.motion.get_ref().is_empty() {
+                strands.set_root_transform(&pose_of(pose_at(
+                    timeline.file.groom.motion.get_ref(),
+                    t_end,
+                )));
+            }
             let mut stage_colliders = ColliderSet::new();
             for (c, &on) in timeline.file.colliders.iter().zip(&active) {
                 if let Some(collider) = colliders.get_mut(c.name.get_ref()) {

@@ -141,6 +141,7 @@ impl Timeline {
                 return fail(up.span(), e);
             }
         }
+        check_keys(self, &f.groom.motion)?;
         if !f.groom.translate.iter().all(|c| c.is_finite()) {
             return fail(0..0, "[groom] translate must be finite".into());
         }
@@ -519,6 +520,27 @@ impl Timeline {
         }
         Ok(())
     }
+}
+
+fn check_keys(
+    timeline: &Timeline,
+    keys: &Spanned<Vec<schema::KeySpec>>,
+) -> Result<(), TimelineError> {
+    let list = keys.get_ref();
+    let finite = list.iter().all(|k| {
+        k.t.is_finite()
+            && k.translation
+                .iter()
+                .chain(k.rotation.iter())
+                .all(|v| v.is_finite())
+    });
+    if !finite || list.windows(2).any(|w| w[1].t <= w[0].t) {
+        return Err(timeline.error_at(
+            keys.span(),
+            "motion keys need finite values and increasing times",
+        ));
+    }
+    Ok(())
 }
 
 fn check_drive(

@@ -70,6 +70,11 @@ pub struct GroomSpec {
     /// Moves the groom after import (metres).
     #[serde(default)]
     pub translate: [f32; 3],
+    /// Keyframed motion of the scalp (global seconds): the roots follow
+    /// this rigid transform of where they start. Give a head collider the
+    /// same keys so it moves along.
+    #[serde(default = "no_motion")]
+    pub motion: Spanned<Vec<KeySpec>>,
 }
 
 /// Bond influences `f_j` (fractions of the restoring force).

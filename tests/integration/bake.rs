@@ -317,3 +317,26 @@ fn bake_writes_a_sheet_before_and_after_each_stage_and_preview_draws_a_timeline(
     let e = dir.run_fail(&["preview", "t.toml", "-o", "q.png", "--frame", "9"], 2);
     assert!(e.contains("3 snapshots"), "{e}");
 }
+
+#[test]
+fn roots_follow_the_scalp_motion() {
+    let dir = TestDir::new();
+    let timeline = "[groom]\ngenerate = { strands = 3, layout = \"swatch\", head_center = [0.0, 0.3, 0.0] }\nmotion = [ { t = 0.0 }, { t = 0.2, translation = [0.05, 0.1, 0.0], rotation = [0.0, 90.0, 0.0] } ]\n[[stage]]\nkind = \"settle\"\nduration = 0.3\n[[export]]\npath = \"end.glb\"\nwhat = \"final\"\n";
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q"]);
+    let end = read(&dir.path("end.glb"));
+    // The generator's swatch roots: x = -0.025, 0, 0.025 (5 cm bar) at y = 0.3.
+    let start = [[-0.025f32, 0.3, 0.0], [0.0, 0.3, 0.0], [0.025, 0.3, 0.0]];
+    assert_eq!(end.strand_count(), 3);
+    for (a, b) in start.iter().zip(end.strands()) {
+        // A quarter turn about Y maps (x, y, z) to (z, y, -x), then the shift.
+        let expected = [a[2] + 0.05, a[1] + 0.1, -a[0]];
+        for k in 0..3 {
+            assert!(
+                (b[0][k] - expected[k]).abs() < 1e-5,
+                "root {:?}, expected {expected:?}",
+                b[0]
+            );
+        }
+    }
+}
