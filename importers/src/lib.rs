@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod hair;
 pub mod mesh;
 pub mod obj;
+mod transform;
 pub mod usd;
 
 use groom::Groom;
