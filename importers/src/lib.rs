@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod hair;
 pub mod mesh;
 pub mod obj;
+mod obj_syntax;
 mod transform;
 pub mod usd;
 
