@@ -228,21 +228,9 @@ impl SpookyHash {
             return;
         }
         let mut h = if self.length < SPOOKY_BUFFER {
-            let (s0, s1) = (self.state[0], self.state[1]);
-            [
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-            ]
+            // The two seeds and the constant, repeated over the 12 words.
+            let seeds = [self.state[0], self.state[1], SPOOKY_CONST];
+            std::array::from_fn(|i| seeds[i % 3])
         } else {
             self.state
         };
