@@ -11,6 +11,22 @@ pub(crate) const IDENTITY: Matrix = [
     [0.0, 0.0, 0.0, 1.0],
 ];
 
+pub(crate) fn translation(v: [f64; 3]) -> Matrix {
+    let mut m = IDENTITY;
+    m[0][3] = v[0];
+    m[1][3] = v[1];
+    m[2][3] = v[2];
+    m
+}
+
+pub(crate) fn scaling(v: [f64; 3]) -> Matrix {
+    let mut m = IDENTITY;
+    m[0][0] = v[0];
+    m[1][1] = v[1];
+    m[2][2] = v[2];
+    m
+}
+
 /// The product `a · b`: `b` applies first.
 pub(crate) fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
     let mut m = [[0.0; 4]; 4];
@@ -65,14 +81,8 @@ mod tests {
 
     #[test]
     fn translation_is_the_last_column_and_the_right_factor_applies_first() {
-        let mut translate = IDENTITY;
-        translate[0][3] = 1.0;
-        translate[1][3] = 2.0;
-        translate[2][3] = 3.0;
-        let mut scale = IDENTITY;
-        scale[0][0] = 2.0;
-        scale[1][1] = 2.0;
-        scale[2][2] = 2.0;
+        let translate = translation([1.0, 2.0, 3.0]);
+        let scale = scaling([2.0; 3]);
         assert_eq!(
             transform_point(&translate, [1.0, 1.0, 1.0]),
             [2.0, 3.0, 4.0]

@@ -4,7 +4,7 @@
 
 use super::archive::{Archive, Kind, Object, Pod, Property};
 use super::ogawa::Fault;
-use crate::transform::{multiply, transform_point, Matrix, IDENTITY};
+use crate::transform::{multiply, scaling, transform_point, translation, Matrix, IDENTITY};
 use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope};
 
 /// Imath's `setAxisAngle`, transposed for column vectors; `degrees` as
@@ -307,20 +307,8 @@ impl SceneReader<'_, '_> {
                 return Err(Fault::path(&path, "a transform value is not finite"));
             }
             let op = match kind {
-                0 => {
-                    let mut m = IDENTITY;
-                    m[0][0] = v[0];
-                    m[1][1] = v[1];
-                    m[2][2] = v[2];
-                    m
-                }
-                1 => {
-                    let mut m = IDENTITY;
-                    m[0][3] = v[0];
-                    m[1][3] = v[1];
-                    m[2][3] = v[2];
-                    m
-                }
+                0 => scaling([v[0], v[1], v[2]]),
+                1 => translation([v[0], v[1], v[2]]),
                 2 => axis_angle([v[0], v[1], v[2]], v[3]),
                 3 => from_imath(v),
                 4 => axis_angle([1.0, 0.0, 0.0], v[0]),

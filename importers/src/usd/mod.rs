@@ -10,7 +10,7 @@
 mod crate_reader;
 mod usda;
 
-use crate::transform::{invert, multiply, transform_point, Matrix, IDENTITY};
+use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
 use crate::{ImportError, Place};
 use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::Path;
@@ -230,20 +230,8 @@ fn op_matrix(kind: &str, v: &[f64]) -> Option<Matrix> {
         _ => None,
     };
     match (kind, v.len()) {
-        ("translate", 3) => {
-            let mut m = IDENTITY;
-            m[0][3] = v[0];
-            m[1][3] = v[1];
-            m[2][3] = v[2];
-            Some(m)
-        }
-        ("scale", 3) => {
-            let mut m = IDENTITY;
-            m[0][0] = v[0];
-            m[1][1] = v[1];
-            m[2][2] = v[2];
-            Some(m)
-        }
+        ("translate", 3) => Some(translation([v[0], v[1], v[2]])),
+        ("scale", 3) => Some(scaling([v[0], v[1], v[2]])),
         ("rotateX", 1) => Some(rotation(0, v[0])),
         ("rotateY", 1) => Some(rotation(1, v[0])),
         ("rotateZ", 1) => Some(rotation(2, v[0])),
