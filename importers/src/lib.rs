@@ -11,6 +11,8 @@ pub mod gltf;
 pub mod hair;
 pub mod mesh;
 pub mod obj;
+mod obj_syntax;
+mod transform;
 pub mod usd;
 
 use groom::Groom;

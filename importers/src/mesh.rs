@@ -2,7 +2,7 @@
 //! TRIANGLES / TRIANGLE_STRIP / TRIANGLE_FAN primitives, as vertices and
 //! index triples.
 
-use crate::obj::tokens_with_columns;
+use crate::obj_syntax::{statements, ForwardReferences};
 use crate::{extension_of, read_bytes, ImportError, Place};
 use std::path::Path;
 
@@ -37,97 +37,34 @@ fn read_obj(path: &Path) -> Result<Triangles, ImportError> {
     parse_obj(path, &read_bytes(path)?)
 }
 
-/// A face corner that refers past the vertices read so far; checked once the
-/// whole file is read.
-struct ForwardReference {
-    index: usize,
-    line: usize,
-    column: usize,
-}
-
 /// `v x y z [w]` vertices and `f i j k ...` faces (1-based indices, negative
 /// ones relative to the vertices read so far, `i/t/n` references keep the
 /// vertex index). Polygons become triangle fans; other statements (lines,
 /// normals, groups, materials) are skipped.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
-    let error = |line: usize, column: usize, message: String| {
-        ImportError::malformed(path, Place::Line { line, column }, message)
-    };
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut forward: Vec<ForwardReference> = Vec::new();
-    for (line_index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line_number = line_index + 1;
-        let text = std::str::from_utf8(raw)
-            .map_err(|e| error(line_number, e.valid_up_to() + 1, "not UTF-8 text".into()))?;
-        let text = text.split('#').next().unwrap_or("");
-        let mut tokens = tokens_with_columns(text);
-        match tokens.next().map(|(_, keyword)| keyword) {
-            Some("v") => {
-                let mut point = [0f32; 3];
-                for (k, component) in point.iter_mut().enumerate() {
-                    let (column, token) = tokens.next().ok_or_else(|| {
-                        error(
-                            line_number,
-                            text.len() + 1,
-                            format!("vertex has {k} coordinates, expected 3"),
-                        )
-                    })?;
-                    *component = token
-                        .parse::<f32>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| {
-                            error(
-                                line_number,
-                                column,
-                                format!("'{token}' is not a finite number"),
-                            )
-                        })?;
-                }
+    let mut forward = ForwardReferences::default();
+    for statement in statements(path, bytes) {
+        let mut statement = statement?;
+        match statement.keyword {
+            "v" => {
+                let point = statement
+                    .coordinates(|token, _| format!("'{token}' is not a finite number"))?;
                 // Triangles index vertices with u32.
                 if vertices.len() > u32::MAX as usize - 1 {
-                    return Err(error(line_number, 1, "more than 2^32 vertices".into()));
+                    return Err(statement.error(1, "more than 2^32 vertices".into()));
                 }
                 vertices.push(point);
             }
-            Some("f") => {
-                let mut corners = Vec::new();
-                for (column, token) in tokens {
-                    let number = token.split('/').next().unwrap_or("");
-                    let value: i64 = number.parse().map_err(|_| {
-                        error(
-                            line_number,
-                            column,
-                            format!("'{token}' is not a vertex index"),
-                        )
-                    })?;
-                    let index = if value > 0 && value <= u32::MAX as i64 {
-                        (value - 1) as usize
-                    } else if value < 0 && value.unsigned_abs() as usize <= vertices.len() {
-                        vertices.len() - value.unsigned_abs() as usize
-                    } else {
-                        return Err(error(
-                            line_number,
-                            column,
-                            format!(
-                                "vertex index {value} is out of range ({} vertices so far)",
-                                vertices.len()
-                            ),
-                        ));
-                    };
-                    if index >= vertices.len() {
-                        forward.push(ForwardReference {
-                            index,
-                            line: line_number,
-                            column,
-                        });
-                    }
-                    corners.push(index as u32);
-                }
+            "f" => {
+                let corners: Vec<u32> = statement
+                    .vertex_indices(vertices.len(), i64::from(u32::MAX), &mut forward)?
+                    .into_iter()
+                    .map(|index| index as u32)
+                    .collect();
                 if corners.len() < 3 {
-                    return Err(error(
-                        line_number,
+                    return Err(statement.error(
                         1,
                         format!("face has {} corners, needs at least 3", corners.len()),
                     ));
@@ -140,17 +77,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
             _ => {}
         }
     }
-    if let Some(bad) = forward.iter().find(|r| r.index >= vertices.len()) {
-        return Err(error(
-            bad.line,
-            bad.column,
-            format!(
-                "vertex index {} is out of range (the file has {} vertices)",
-                bad.index + 1,
-                vertices.len()
-            ),
-        ));
-    }
+    forward.check(path, vertices.len())?;
     Ok((vertices, triangles))
 }
 

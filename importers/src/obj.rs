@@ -7,7 +7,8 @@
 //! `.obj` exporter writes for USC-HairSalon's empty roots). Other statements
 //! (faces, normals, groups, materials) are skipped.
 
-use crate::{ImportError, Place};
+use crate::obj_syntax::{statements, BadCoordinate, ForwardReferences};
+use crate::ImportError;
 use groom::{Groom, Units, UpAxis};
 use std::path::Path;
 
@@ -16,94 +17,27 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
     parse(path, &bytes)
 }
 
-/// A vertex index of an `l` statement that refers past the vertices read so
-/// far; checked once the file is read.
-struct ForwardReference {
-    index: usize,
-    line: usize,
-    column: usize,
-}
-
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
-    let error = |line: usize, column: usize, message: String| {
-        ImportError::malformed(path, Place::Line { line, column }, message)
-    };
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut strands: Vec<Vec<usize>> = Vec::new();
     // The strand being chained from two-index `l` statements.
     let mut chain: Vec<usize> = Vec::new();
-    let mut forward: Vec<ForwardReference> = Vec::new();
+    let mut forward = ForwardReferences::default();
 
-    for (line_index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line_number = line_index + 1;
-        let text = std::str::from_utf8(raw)
-            .map_err(|e| error(line_number, e.valid_up_to() + 1, "not UTF-8 text".into()))?;
-        let text = text.split('#').next().unwrap_or("");
-        let mut tokens = tokens_with_columns(text);
-        let Some((_, keyword)) = tokens.next() else {
-            continue;
-        };
-        match keyword {
+    for statement in statements(path, bytes) {
+        let mut statement = statement?;
+        match statement.keyword {
             "v" => {
-                let mut point = [0.0f32; 3];
-                for (k, component) in point.iter_mut().enumerate() {
-                    let (column, token) = tokens.next().ok_or_else(|| {
-                        error(
-                            line_number,
-                            text.len() + 1,
-                            format!("vertex has {k} coordinates, expected 3"),
-                        )
-                    })?;
-                    let value: f32 = token.parse().map_err(|_| {
-                        error(line_number, column, format!("'{token}' is not a number"))
-                    })?;
-                    if !value.is_finite() {
-                        return Err(error(
-                            line_number,
-                            column,
-                            format!("coordinate {token} is not finite"),
-                        ));
-                    }
-                    *component = value;
-                }
+                let point = statement.coordinates(|token, bad| match bad {
+                    BadCoordinate::NotANumber => format!("'{token}' is not a number"),
+                    BadCoordinate::NotFinite => format!("coordinate {token} is not finite"),
+                })?;
                 vertices.push(point);
             }
             "l" => {
-                let mut indices = Vec::new();
-                for (column, token) in tokens {
-                    let number = token.split('/').next().unwrap_or("");
-                    let value: i64 = number.parse().map_err(|_| {
-                        error(
-                            line_number,
-                            column,
-                            format!("'{token}' is not a vertex index"),
-                        )
-                    })?;
-                    let index = if value > 0 {
-                        (value - 1) as usize
-                    } else if value < 0 && value.unsigned_abs() as usize <= vertices.len() {
-                        vertices.len() - value.unsigned_abs() as usize
-                    } else {
-                        return Err(error(
-                            line_number,
-                            column,
-                            format!(
-                                "vertex index {value} is out of range ({} vertices so far)",
-                                vertices.len()
-                            ),
-                        ));
-                    };
-                    if index >= vertices.len() {
-                        forward.push(ForwardReference {
-                            index,
-                            line: line_number,
-                            column,
-                        });
-                    }
-                    indices.push(index);
-                }
+                let indices = statement.vertex_indices(vertices.len(), i64::MAX, &mut forward)?;
                 match indices.as_slice() {
-                    [] => return Err(error(line_number, 1, "'l' without vertex indices".into())),
+                    [] => return Err(statement.error(1, "'l' without vertex indices".into())),
                     [a, b] => {
                         if chain.last() == Some(a) {
                             chain.push(*b);
@@ -128,17 +62,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     if !chain.is_empty() {
         strands.push(chain);
     }
-    if let Some(bad) = forward.iter().find(|r| r.index >= vertices.len()) {
-        return Err(error(
-            bad.line,
-            bad.column,
-            format!(
-                "vertex index {} is out of range (the file has {} vertices)",
-                bad.index + 1,
-                vertices.len()
-            ),
-        ));
-    }
+    forward.check(path, vertices.len())?;
     let mut groom = Groom {
         units: Units::default(),
         up_axis: UpAxis::Y,
@@ -152,27 +76,6 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     }
     groom.provenance.format = "obj".into();
     Ok(groom)
-}
-
-/// Whitespace-separated tokens with their 1-based columns.
-pub(crate) fn tokens_with_columns(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    let mut rest = text;
-    let mut offset = 0usize;
-    std::iter::from_fn(move || {
-        let trimmed = rest.trim_start();
-        offset += rest.len() - trimmed.len();
-        if trimmed.is_empty() {
-            return None;
-        }
-        let end = trimmed
-            .find(|c: char| c.is_whitespace())
-            .unwrap_or(trimmed.len());
-        let token = &trimmed[..end];
-        let column = offset + 1;
-        offset += end;
-        rest = &trimmed[end..];
-        Some((column, token))
-    })
 }
 
 #[cfg(test)]

@@ -42,6 +42,31 @@ fn read(path: &Path) -> Groom {
     importers::read(path).unwrap_or_else(|e| panic!("read {}: {e}", path.display()))
 }
 
+/// Bakes a wash of `duration` seconds of the state in `source` (a groom
+/// exported with `what = "state"`) with the given `bonds` table, and returns
+/// the turning angles of the washed rest shape.
+fn washed_rest_angles(dir: &TestDir, source: &str, bonds: &str, duration: &str) -> Vec<Vec<f64>> {
+    let wash = format!(
+        r#"
+[groom]
+source = "{source}"
+[material]
+bonds = {bonds}
+[solver]
+gravity = [0.0, 0.0, 0.0]
+[[stage]]
+kind = "wash"
+duration = {duration}
+[[export]]
+path = "washed_rest.glb"
+what = "rest"
+"#
+    );
+    std::fs::write(dir.path("wash.toml"), wash).unwrap();
+    dir.run_ok(&["bake", "wash.toml", "-q"]);
+    turning_angles(&read(&dir.path("washed_rest.glb")))
+}
+
 const BED_HAIR: &str = r#"
 seed = 1
 [groom]
@@ -108,24 +133,13 @@ fn wash_erases_bed_hair() {
     std::fs::write(dir.path("bed.toml"), BED_HAIR).unwrap();
     dir.run_ok(&["bake", "bed.toml", "-q"]);
     let held_sum = darboux_sum(&turning_angles(&read(&dir.path("held.glb"))), |_, _| true);
-    let wash = r#"
-[groom]
-source = "state.glb"
-[material]
-bonds = { hydrogen = 0.33, ionic = 0.30, disulfide = 0.20, peptide = 0.17 }
-[solver]
-gravity = [0.0, 0.0, 0.0]
-[[stage]]
-kind = "wash"
-duration = 6.0
-[[export]]
-path = "washed_rest.glb"
-what = "rest"
-"#;
-    std::fs::write(dir.path("wash.toml"), wash).unwrap();
-    dir.run_ok(&["bake", "wash.toml", "-q"]);
     let washed = darboux_sum(
-        &turning_angles(&read(&dir.path("washed_rest.glb"))),
+        &washed_rest_angles(
+            &dir,
+            "state.glb",
+            "{ hydrogen = 0.33, ionic = 0.30, disulfide = 0.20, peptide = 0.17 }",
+            "6.0",
+        ),
         |_, _| true,
     );
     eprintln!(
@@ -188,23 +202,12 @@ fn perm_rest_keeps_two_thirds_of_the_rod_and_wash_keeps_what_the_model_predicts(
         "perm keeps {kept:.4} of the rod's curvature, expected 0.67"
     );
 
-    let wash = r#"
-[groom]
-source = "perm_state.glb"
-[material]
-bonds = { hydrogen = 0.35, ionic = 0.28, disulfide = 0.20, peptide = 0.17 }
-[solver]
-gravity = [0.0, 0.0, 0.0]
-[[stage]]
-kind = "wash"
-duration = 30.0
-[[export]]
-path = "washed_rest.glb"
-what = "rest"
-"#;
-    std::fs::write(dir.path("wash.toml"), wash).unwrap();
-    dir.run_ok(&["bake", "wash.toml", "-q"]);
-    let washed = turning_angles(&read(&dir.path("washed_rest.glb")));
+    let washed = washed_rest_angles(
+        &dir,
+        "perm_state.glb",
+        "{ hydrogen = 0.35, ionic = 0.28, disulfide = 0.20, peptide = 0.17 }",
+        "30.0",
+    );
     let kept_after_wash = darboux_sum(&washed, wound) / joints as f64 / per_joint_rod;
     let predicted = (0.28 + 0.2 * 0.20) / (1.0 - 0.35);
     eprintln!("perm after wash: keeps {kept_after_wash:.4} of the rod (predicted {predicted:.4})");

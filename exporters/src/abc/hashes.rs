@@ -22,6 +22,20 @@ fn u64_le(bytes: &[u8]) -> u64 {
     u64::from_le_bytes(word)
 }
 
+/// The mix of a first-half key word (blocks and tail alike).
+fn murmur_k1(k1: u64) -> u64 {
+    k1.wrapping_mul(MURMUR_C1)
+        .rotate_left(31)
+        .wrapping_mul(MURMUR_C2)
+}
+
+/// The mix of a second-half key word.
+fn murmur_k2(k2: u64) -> u64 {
+    k2.wrapping_mul(MURMUR_C2)
+        .rotate_left(33)
+        .wrapping_mul(MURMUR_C1)
+}
+
 /// MurmurHash3_x64_128 of `data` with `seed` (Alembic uses seed 0); the two
 /// 64-bit halves in the order the reference stores them.
 pub fn murmur3_x64_128(data: &[u8], seed: u32) -> [u64; 2] {
@@ -29,23 +43,13 @@ pub fn murmur3_x64_128(data: &[u8], seed: u32) -> [u64; 2] {
     let mut h2 = u64::from(seed);
     let mut blocks = data.chunks_exact(16);
     for block in &mut blocks {
-        let mut k1 = u64_le(&block[..8]);
-        let mut k2 = u64_le(&block[8..]);
-        k1 = k1
-            .wrapping_mul(MURMUR_C1)
-            .rotate_left(31)
-            .wrapping_mul(MURMUR_C2);
-        h1 ^= k1;
+        h1 ^= murmur_k1(u64_le(&block[..8]));
         h1 = h1
             .rotate_left(27)
             .wrapping_add(h2)
             .wrapping_mul(5)
             .wrapping_add(0x52dc_e729);
-        k2 = k2
-            .wrapping_mul(MURMUR_C2)
-            .rotate_left(33)
-            .wrapping_mul(MURMUR_C1);
-        h2 ^= k2;
+        h2 ^= murmur_k2(u64_le(&block[8..]));
         h2 = h2
             .rotate_left(31)
             .wrapping_add(h1)
@@ -54,18 +58,10 @@ pub fn murmur3_x64_128(data: &[u8], seed: u32) -> [u64; 2] {
     }
     let tail = blocks.remainder();
     if tail.len() > 8 {
-        let k2 = u64_le(&tail[8..]);
-        h2 ^= k2
-            .wrapping_mul(MURMUR_C2)
-            .rotate_left(33)
-            .wrapping_mul(MURMUR_C1);
+        h2 ^= murmur_k2(u64_le(&tail[8..]));
     }
     if !tail.is_empty() {
-        let k1 = u64_le(&tail[..tail.len().min(8)]);
-        h1 ^= k1
-            .wrapping_mul(MURMUR_C1)
-            .rotate_left(31)
-            .wrapping_mul(MURMUR_C2);
+        h1 ^= murmur_k1(u64_le(&tail[..tail.len().min(8)]));
     }
     let len = data.len() as u64;
     h1 ^= len;
@@ -232,21 +228,9 @@ impl SpookyHash {
             return;
         }
         let mut h = if self.length < SPOOKY_BUFFER {
-            let (s0, s1) = (self.state[0], self.state[1]);
-            [
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-                s0,
-                s1,
-                SPOOKY_CONST,
-            ]
+            // The two seeds and the constant, repeated over the 12 words.
+            let seeds = [self.state[0], self.state[1], SPOOKY_CONST];
+            std::array::from_fn(|i| seeds[i % 3])
         } else {
             self.state
         };

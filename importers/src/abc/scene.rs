@@ -4,38 +4,11 @@
 
 use super::archive::{Archive, Kind, Object, Pod, Property};
 use super::ogawa::Fault;
+use crate::transform::{multiply, scaling, transform_point, translation, Matrix, IDENTITY};
 use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope};
 
-type Matrix = [[f64; 4]; 4];
-
-const IDENTITY: Matrix = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 1.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
-
-/// Row-vector product `a * b` (Imath's convention: points are rows).
-fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
-    let mut out = [[0.0; 4]; 4];
-    for (i, row) in out.iter_mut().enumerate() {
-        for (j, cell) in row.iter_mut().enumerate() {
-            *cell = (0..4).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    out
-}
-
-fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
-    let [x, y, z] = p.map(f64::from);
-    let mut out = [0f32; 3];
-    for (j, c) in out.iter_mut().enumerate() {
-        *c = (x * m[0][j] + y * m[1][j] + z * m[2][j] + m[3][j]) as f32;
-    }
-    out
-}
-
-/// Imath's `setAxisAngle` for row vectors; `degrees` as Alembic stores them.
+/// Imath's `setAxisAngle`, transposed for column vectors; `degrees` as
+/// Alembic stores them.
 fn axis_angle(axis: [f64; 3], degrees: f64) -> Matrix {
     let length = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
     if length == 0.0 {
@@ -47,24 +20,34 @@ fn axis_angle(axis: [f64; 3], degrees: f64) -> Matrix {
     [
         [
             u0 * u0 * t + c,
-            u0 * u1 * t + u2 * s,
-            u0 * u2 * t - u1 * s,
-            0.0,
-        ],
-        [
             u0 * u1 * t - u2 * s,
-            u1 * u1 * t + c,
-            u1 * u2 * t + u0 * s,
+            u0 * u2 * t + u1 * s,
             0.0,
         ],
         [
-            u0 * u2 * t + u1 * s,
+            u0 * u1 * t + u2 * s,
+            u1 * u1 * t + c,
             u1 * u2 * t - u0 * s,
+            0.0,
+        ],
+        [
+            u0 * u2 * t - u1 * s,
+            u1 * u2 * t + u0 * s,
             u2 * u2 * t + c,
             0.0,
         ],
         [0.0, 0.0, 0.0, 1.0],
     ]
+}
+
+/// A matrix as Imath stores it (16 values, row by row, for row vectors),
+/// transposed for column vectors.
+fn from_imath(v: &[f64]) -> Matrix {
+    let mut m = IDENTITY;
+    for (index, value) in v.iter().take(16).enumerate() {
+        m[index % 4][index / 4] = *value;
+    }
+    m
 }
 
 /// Converts stored values of any numeric type to f64, component by component.
@@ -200,7 +183,7 @@ impl SceneReader<'_, '_> {
         if kind.starts_with("AbcGeom_Xform") {
             let (local, inherits) = self.xform(object)?;
             world = if inherits {
-                multiply(&local, parent)
+                multiply(parent, &local)
             } else {
                 local
             };
@@ -324,36 +307,16 @@ impl SceneReader<'_, '_> {
                 return Err(Fault::path(&path, "a transform value is not finite"));
             }
             let op = match kind {
-                0 => {
-                    let mut m = IDENTITY;
-                    m[0][0] = v[0];
-                    m[1][1] = v[1];
-                    m[2][2] = v[2];
-                    m
-                }
-                1 => {
-                    let mut m = IDENTITY;
-                    m[3][0] = v[0];
-                    m[3][1] = v[1];
-                    m[3][2] = v[2];
-                    m
-                }
+                0 => scaling([v[0], v[1], v[2]]),
+                1 => translation([v[0], v[1], v[2]]),
                 2 => axis_angle([v[0], v[1], v[2]], v[3]),
-                3 => {
-                    let mut m = IDENTITY;
-                    for (j, row) in m.iter_mut().enumerate() {
-                        for (k, cell) in row.iter_mut().enumerate() {
-                            *cell = v[4 * j + k];
-                        }
-                    }
-                    m
-                }
+                3 => from_imath(v),
                 4 => axis_angle([1.0, 0.0, 0.0], v[0]),
                 5 => axis_angle([0.0, 1.0, 0.0], v[0]),
                 _ => axis_angle([0.0, 0.0, 1.0], v[0]),
             };
             // Each operation applies before the ones already accumulated.
-            matrix = multiply(&op, &matrix);
+            matrix = multiply(&matrix, &op);
         }
         Ok((matrix, inherits))
     }
@@ -403,7 +366,7 @@ impl SceneReader<'_, '_> {
             }
             if *world != IDENTITY {
                 for p in &mut points {
-                    *p = transform(world, *p);
+                    *p = transform_point(world, p.map(f64::from)).map(|c| c as f32);
                 }
             }
             samples.push(points);
@@ -712,18 +675,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rotation_follows_imath_row_vectors() {
+    fn rotation_follows_imath() {
         // 90 degrees about Z takes +X to +Y.
         let m = axis_angle([0.0, 0.0, 1.0], 90.0);
-        let p = transform(&m, [1.0, 0.0, 0.0]);
+        let p = transform_point(&m, [1.0, 0.0, 0.0]);
         assert!((p[0]).abs() < 1e-6 && (p[1] - 1.0).abs() < 1e-6 && p[2].abs() < 1e-6);
     }
 
     #[test]
-    fn translation_is_the_last_row() {
-        let mut m = IDENTITY;
-        m[3] = [1.0, 2.0, 3.0, 1.0];
-        assert_eq!(transform(&m, [1.0, 1.0, 1.0]), [2.0, 3.0, 4.0]);
+    fn imath_translation_is_the_last_row() {
+        let mut v = [0.0; 16];
+        for k in 0..4 {
+            v[5 * k] = 1.0;
+        }
+        v[12..16].copy_from_slice(&[1.0, 2.0, 3.0, 1.0]);
+        assert_eq!(
+            transform_point(&from_imath(&v), [1.0, 1.0, 1.0]),
+            [2.0, 3.0, 4.0]
+        );
     }
 
     #[test]

@@ -10,6 +10,7 @@
 mod crate_reader;
 mod usda;
 
+use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
 use crate::{ImportError, Place};
 use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::Path;
@@ -204,63 +205,6 @@ pub(crate) fn element_kind(type_name: &str) -> Option<ElementKind> {
     }
 }
 
-/// A 4x4 matrix acting on column vectors: `p' = m · [p, 1]`.
-type Matrix = [[f64; 4]; 4];
-
-const IDENTITY: Matrix = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 1.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
-
-fn multiply(a: &Matrix, b: &Matrix) -> Matrix {
-    let mut m = [[0.0; 4]; 4];
-    for (r, row) in m.iter_mut().enumerate() {
-        for (c, cell) in row.iter_mut().enumerate() {
-            *cell = (0..4).map(|k| a[r][k] * b[k][c]).sum();
-        }
-    }
-    m
-}
-
-fn transform_point(m: &Matrix, p: [f64; 3]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (r, value) in out.iter_mut().enumerate() {
-        *value = m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3];
-    }
-    out
-}
-
-/// Gauss-Jordan inverse with partial pivoting; `None` when singular.
-fn invert(m: &Matrix) -> Option<Matrix> {
-    let mut a = *m;
-    let mut inv = IDENTITY;
-    for col in 0..4 {
-        let pivot = (col..4).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs()))?;
-        if a[pivot][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, pivot);
-        inv.swap(col, pivot);
-        let d = a[col][col];
-        for k in 0..4 {
-            a[col][k] /= d;
-            inv[col][k] /= d;
-        }
-        for row in 0..4 {
-            if row != col {
-                let f = a[row][col];
-                for k in 0..4 {
-                    a[row][k] -= f * a[col][k];
-                    inv[row][k] -= f * inv[col][k];
-                }
-            }
-        }
-    }
-    Some(inv)
-}
-
 fn rotation(axis: usize, degrees: f64) -> Matrix {
     let (s, c) = degrees.to_radians().sin_cos();
     let mut m = IDENTITY;
@@ -286,20 +230,8 @@ fn op_matrix(kind: &str, v: &[f64]) -> Option<Matrix> {
         _ => None,
     };
     match (kind, v.len()) {
-        ("translate", 3) => {
-            let mut m = IDENTITY;
-            m[0][3] = v[0];
-            m[1][3] = v[1];
-            m[2][3] = v[2];
-            Some(m)
-        }
-        ("scale", 3) => {
-            let mut m = IDENTITY;
-            m[0][0] = v[0];
-            m[1][1] = v[1];
-            m[2][2] = v[2];
-            Some(m)
-        }
+        ("translate", 3) => Some(translation([v[0], v[1], v[2]])),
+        ("scale", 3) => Some(scaling([v[0], v[1], v[2]])),
         ("rotateX", 1) => Some(rotation(0, v[0])),
         ("rotateY", 1) => Some(rotation(1, v[0])),
         ("rotateZ", 1) => Some(rotation(2, v[0])),
