@@ -69,7 +69,7 @@ pub trait FrameWriter {
 }
 
 fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
-    if let Some(problem) = groom.validate().into_iter().find(|p| p.is_fatal()) {
+    if let Some(problem) = groom.first_fatal_problem() {
         return Err(ExportError::Invalid {
             file: path.to_path_buf(),
             message: problem.to_string(),

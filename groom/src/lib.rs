@@ -180,17 +180,10 @@ impl Groom {
     /// with the length unit.
     pub fn convert_to(&mut self, units: Units, up: UpAxis) {
         let scale = (self.units.meters_per_unit / units.meters_per_unit) as f32;
-        let from = self.up_axis;
-        let map = |p: [f32; 3]| up.from_y_up(from.to_y_up(p)).map(|c| c * scale);
-        if scale != 1.0 || from != up {
-            for p in &mut self.points {
-                *p = map(*p);
-            }
-            for frame in &mut self.frames {
-                for p in &mut frame.points {
-                    *p = map(*p);
-                }
-            }
+        let from = (self.units, self.up_axis);
+        convert_points(&mut self.points, from, (units, up));
+        for frame in &mut self.frames {
+            convert_points(&mut frame.points, from, (units, up));
         }
         if scale != 1.0 {
             for attribute in &mut self.attributes {
@@ -201,6 +194,17 @@ impl Groom {
         }
         self.units = units;
         self.up_axis = up;
+    }
+}
+
+/// Rescales and rotates points from one units/up-axis convention to another
+/// (a frame streamed to an exporter, or the points of a groom).
+pub fn convert_points(points: &mut [[f32; 3]], from: (Units, UpAxis), to: (Units, UpAxis)) {
+    let scale = (from.0.meters_per_unit / to.0.meters_per_unit) as f32;
+    if scale != 1.0 || from.1 != to.1 {
+        for p in points {
+            *p = to.1.from_y_up(from.1.to_y_up(*p)).map(|c| c * scale);
+        }
     }
 }
 

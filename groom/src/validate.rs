@@ -189,6 +189,11 @@ impl Groom {
         problems
     }
 
+    /// The first problem that makes the groom unusable, if any.
+    pub fn first_fatal_problem(&self) -> Option<Problem> {
+        self.validate().into_iter().find(Problem::is_fatal)
+    }
+
     /// The range of point indices of each strand, clipped to the points.
     pub fn strand_ranges(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
         let total = self.points.len();

@@ -97,7 +97,7 @@ pub fn is_broken_pipe(error: &anyhow::Error) -> bool {
 /// Reads a groom file and refuses one with fatal problems, naming the first.
 pub fn read_groom(path: &std::path::Path) -> anyhow::Result<groom::Groom> {
     let groom = importers::read(path)?;
-    if let Some(problem) = groom.validate().into_iter().find(|p| p.is_fatal()) {
+    if let Some(problem) = groom.first_fatal_problem() {
         return Err(BadInput(format!("{}: {problem}", path.display())).into());
     }
     Ok(groom)

@@ -132,7 +132,7 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
                         .map_err(|m: String| timeline.error_at(up.span(), m))?;
                 }
             }
-            if let Some(problem) = groom.validate().into_iter().find(|p| p.is_fatal()) {
+            if let Some(problem) = groom.first_fatal_problem() {
                 return Err(BakeError::Input {
                     file: path,
                     message: problem.to_string(),
@@ -259,14 +259,6 @@ fn export_units(timeline: &Timeline, index: usize) -> (Units, UpAxis) {
     (units, up)
 }
 
-fn convert_points(points: &[[f32; 3]], units: Units, up: UpAxis) -> Vec<[f32; 3]> {
-    let scale = (1.0 / units.meters_per_unit) as f32;
-    points
-        .iter()
-        .map(|&p| up.from_y_up(p).map(|c| c * scale))
-        .collect()
-}
-
 /// The groom with the current pose and the simulation's per-vertex
 /// attributes (bond rates, wetness), and state attributes when asked.
 fn groom_now(base: &Groom, strands: &StrandSet, points: Vec<[f32; 3]>, with_state: bool) -> Groom {
@@ -352,17 +344,6 @@ fn output_report(
     })
 }
 
-/// Lets go of every kinematic target (rods, holds): nothing holds the hair.
-fn release_kinematic_targets(strands: &mut StrandSet) -> Result<(), BakeError> {
-    for s in 0..strands.strand_count() {
-        let count = strands.strand_range(s).map_or(0, |r| r.len());
-        for v in 1..count {
-            strands.set_kinematic_target(s, v, None)?;
-        }
-    }
-    Ok(())
-}
-
 /// The same state with edge frames rebuilt from the current positions
 /// (after a stage that moved the points directly, as the stochastic wind
 /// does); bonds, memories, wetness and rest lengths are kept.
@@ -438,7 +419,7 @@ fn bake_in_pool(
     let Prepared {
         groom,
         mut strands,
-        mut colliders,
+        colliders,
         parameters,
         seed,
     } = prepare(timeline, options.seed)?;
@@ -503,9 +484,11 @@ fn bake_in_pool(
                 if due > step {
                     break;
                 }
+                let mut points = strands.positions().to_vec();
+                groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let frame = Frame {
                     time: k as f64 / a.fps,
-                    points: convert_points(strands.positions(), a.units, a.up),
+                    points,
                 };
                 a.writer.write_frame(&frame)?;
                 a.frames_written += 1;
@@ -567,8 +550,25 @@ fn bake_in_pool(
             stage_parameters.angular_damping = d.angular;
         }
         let mut solver = Solver::new(stage_parameters)?;
+        // The colliders of this stage, where their motion has them now.
+        let mut stage_colliders = ColliderSet::new();
+        let mut stage_motions = Vec::new();
+        for ((collider, spec), &on) in colliders
+            .colliders
+            .iter()
+            .zip(&timeline.file.colliders)
+            .zip(&active)
+        {
+            if on {
+                let keys = spec.motion.get_ref().as_slice();
+                let mut collider = collider.clone();
+                collider.set_pose(pose_of(pose_at(keys, global_time)));
+                stage_colliders.insert(collider);
+                stage_motions.push(keys);
+            }
+        }
         if plan.release_targets {
-            release_kinematic_targets(&mut strands)?;
+            strands.clear_kinematic_targets();
         }
         let rods = plan
             .perm
@@ -582,22 +582,17 @@ fn bake_in_pool(
         for local_step in 0..steps {
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
-            // Kinematic colliders: the pose at the end of the step, with
-            // the velocity that gets them there (friction drags hair along).
+            // The scalp and the kinematic colliders take their pose at the
+            // end of the step; colliders also the velocity that gets them
+            // there (friction drags hair along).
             if !timeline.file.groom.motion.get_ref().is_empty() {
                 strands.set_root_transform(&pose_of(pose_at(
                     timeline.file.groom.motion.get_ref(),
                     t_end,
                 )));
             }
-            let mut stage_colliders = ColliderSet::new();
-            for (c, &on) in timeline.file.colliders.iter().zip(&active) {
-                if let Some(collider) = colliders.get_mut(c.name.get_ref()) {
-                    collider.move_to(pose_of(pose_at(c.motion.get_ref(), t_end)), dt as f32);
-                    if on {
-                        stage_colliders.insert(collider.clone());
-                    }
-                }
+            for (collider, keys) in stage_colliders.colliders.iter_mut().zip(&stage_motions) {
+                collider.move_to(pose_of(pose_at(keys, t_end)), dt as f32);
             }
             if let (Some(rods), Some(perm)) = (&rods, &plan.perm) {
                 if t_local < perm.set_end {
@@ -629,7 +624,7 @@ fn bake_in_pool(
         }
         global_time += steps as f64 * dt;
         snapshots.push((
-            format!("after {}", spec.name.as_deref().unwrap_or(plan.kind.name())),
+            format!("after {}", stage_report.name),
             groom_now(&groom, &strands, strands.positions().to_vec(), false),
         ));
         if !stage_report.contained_strands.is_empty() {
