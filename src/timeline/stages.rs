@@ -340,11 +340,6 @@ impl PermRods {
         }
         Ok(())
     }
-
-    /// The curvature the rods impose, 1/m.
-    pub fn curvature(&self) -> f64 {
-        1.0 / self.radius as f64
-    }
 }
 
 fn point_at_arc(points: &[[f64; 3]], arc: &[f64], a: f64) -> [f64; 3] {
