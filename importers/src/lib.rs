@@ -64,11 +64,18 @@ pub enum ImportError {
 }
 
 impl ImportError {
+    /// A problem in a file's contents. Messages and places often quote the
+    /// file (names, tokens, paths): control characters in them are escaped
+    /// so that an error line stays one printable line.
     pub fn malformed(file: &Path, place: Place, message: impl Into<String>) -> ImportError {
+        let place = match place {
+            Place::Path(path) => Place::Path(escape_controls(&path)),
+            other => other,
+        };
         ImportError::Malformed {
             file: file.to_path_buf(),
             place,
-            message: message.into(),
+            message: escape_controls(&message.into()),
         }
     }
 
@@ -78,6 +85,23 @@ impl ImportError {
             source,
         }
     }
+}
+
+/// Text with control characters (NUL, escape, newlines, ...) written as
+/// Rust escapes (`\0`, `\u{1b}`, `\n`); other characters unchanged.
+pub fn escape_controls(text: &str) -> String {
+    if !text.chars().any(char::is_control) {
+        return text.to_string();
+    }
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// The file extensions [`read`] knows, lower case, without the dot.

@@ -1,0 +1,276 @@
+//! glTF 2.0 (`.gltf` with embedded or external buffers, `.glb`). Strands are
+//! read from `LINE_STRIP` primitives (one strand each) and `LINES`
+//! primitives (consecutive segments that share an end vertex join into one
+//! strand); other primitives (a head mesh, points) are skipped by [`read`];
+//! [`read_triangles`] reads the triangle primitives instead, for colliders.
+//! The scene graph's transforms are applied. Morph-target animation becomes
+//! frames: frame k is the base pose plus the targets weighted by the k-th
+//! keyframe of the `weights` sampler. `TEXCOORD_0` comes back as `root_uv`.
+//! `_NAME` vertex attributes come back as attributes named `name` (lower
+//! case), unless the accessor's `extras.groombake` (written by groombake's
+//! exporter) gives the name, says the attribute is per strand (taken from
+//! each strand's first vertex, if every strand's values agree), says float
+//! or split-byte values are 32-bit integers, or says a VEC3 holds a 2-vector.
+//! glTF is metres and Y up.
+//!
+//! The parts: [`document`] turns bytes into a document whose every index
+//! and enum is checked where it is used (the `gltf` crate's loader panics on
+//! some bad ones), [`accessors`] reads accessor data checked against the
+//! buffers, [`scene`] walks the node graph, [`lines`] and [`triangles`]
+//! decode primitives, [`animation`] makes frames.
+
+mod accessors;
+mod animation;
+mod document;
+mod lines;
+mod scene;
+#[cfg(test)]
+mod tests;
+mod triangles;
+
+use crate::mesh::Triangles;
+use crate::ImportError;
+use animation::Piece;
+use document::Document;
+use groom::{Attribute, AttributeValues, Groom, Units, UpAxis};
+use lines::Lines;
+use std::collections::btree_map::Entry;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use triangles::{MAX_MESH_TRIANGLES, MAX_MESH_VERTICES};
+
+/// The most points the groom may have once instanced meshes are expanded.
+const MAX_GROOM_POINTS: usize = 1 << 26;
+
+pub fn read(path: &Path) -> Result<Groom, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    parse(path, &bytes)
+}
+
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
+    let document = Document::load(path, bytes)?;
+    let (decoded, pieces) = line_pieces(&document)?;
+    let mut groom = Groom {
+        units: Units::METERS,
+        up_axis: UpAxis::Y,
+        ..Groom::default()
+    };
+    let common = common_attributes(&decoded, &pieces);
+    let per_strand: BTreeSet<String> = common
+        .keys()
+        .filter(|name| {
+            pieces
+                .iter()
+                .all(|p| decoded[p.lines].per_strand.contains(*name))
+        })
+        .cloned()
+        .collect();
+    let mut attributes = common;
+    for piece in &pieces {
+        let lines = &decoded[piece.lines];
+        for strand in &lines.strands {
+            groom.strand_vertex_counts.push(strand.len() as u32);
+            for &i in strand {
+                let p = lines.positions.get(i).copied().unwrap_or_default();
+                let p = scene::transform(&piece.world, p);
+                if p.iter().any(|c| !c.is_finite()) {
+                    return Err(document.error(
+                        format!("/nodes/{}", piece.node),
+                        "the node's transform moves a point to a value that is not finite",
+                    ));
+                }
+                groom.points.push(p);
+            }
+            for (name, values) in attributes.iter_mut() {
+                if let Some(source) = lines.attributes.get(name) {
+                    let selected = if per_strand.contains(name) {
+                        &strand[..strand.len().min(1)]
+                    } else {
+                        strand
+                    };
+                    append_selected(values, source, selected);
+                }
+            }
+        }
+    }
+    for (name, values) in attributes {
+        groom.attributes.push(if per_strand.contains(&name) {
+            Attribute::per_strand(name, values)
+        } else {
+            Attribute::new(name, values)
+        });
+    }
+    groom.frames = document.frames(&decoded, &pieces)?;
+    groom.provenance.format = "gltf".into();
+    Ok(groom)
+}
+
+/// Every line primitive of the scene decoded once, and each of its
+/// instances with its world matrix.
+fn line_pieces(document: &Document) -> Result<(Vec<Lines>, Vec<Piece>), ImportError> {
+    let mut decoded: Vec<Lines> = Vec::new();
+    let mut slot_of: BTreeMap<(usize, usize), Option<usize>> = BTreeMap::new();
+    let mut pieces = Vec::new();
+    let mut points = 0usize;
+    scene::walk(document, |node_index, node, world| {
+        let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
+            return Ok(());
+        };
+        let mesh = document.get(&document.root.meshes, mesh_index, "mesh", || {
+            format!("/nodes/{node_index}/mesh")
+        })?;
+        for (primitive_index, primitive) in mesh.primitives.iter().enumerate() {
+            let slot = match slot_of.entry((mesh_index, primitive_index)) {
+                Entry::Occupied(entry) => *entry.get(),
+                Entry::Vacant(entry) => {
+                    let lines = document.lines(mesh_index, mesh, primitive_index, primitive)?;
+                    *entry.insert(lines.map(|lines| {
+                        decoded.push(lines);
+                        decoded.len() - 1
+                    }))
+                }
+            };
+            let Some(slot) = slot else {
+                continue;
+            };
+            points += decoded[slot].point_count();
+            if points > MAX_GROOM_POINTS {
+                return Err(document.error(
+                    format!("/nodes/{node_index}"),
+                    format!(
+                        "the scene's line primitives exceed {MAX_GROOM_POINTS} points \
+                         (meshes instanced by many nodes?)"
+                    ),
+                ));
+            }
+            pieces.push(Piece {
+                lines: slot,
+                world,
+                node: node_index,
+            });
+        }
+        Ok(())
+    })?;
+    Ok((decoded, pieces))
+}
+
+/// Attributes every line primitive has, with the same type, empty.
+fn common_attributes(decoded: &[Lines], pieces: &[Piece]) -> BTreeMap<String, AttributeValues> {
+    let mut common: Option<BTreeMap<String, AttributeValues>> = None;
+    for piece in pieces {
+        let names: BTreeMap<String, AttributeValues> = decoded[piece.lines]
+            .attributes
+            .iter()
+            .map(|(name, values)| (name.clone(), empty_like(values)))
+            .collect();
+        common = Some(match common {
+            None => names,
+            Some(so_far) => so_far
+                .into_iter()
+                .filter(|(name, values)| names.get(name).is_some_and(|v| same_type(v, values)))
+                .collect(),
+        });
+    }
+    common.unwrap_or_default()
+}
+
+/// Reads the triangles of every TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN
+/// primitive of the scene's meshes, in world coordinates (node transforms
+/// applied; a node that mirrors gets its triangles' winding reversed, as the
+/// glTF specification asks, so they keep facing outwards). Line and point
+/// primitives, morph targets and skins are ignored: a collider is rigid.
+pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    parse_triangles(path, &bytes)
+}
+
+pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    let document = Document::load(path, bytes)?;
+    let mut vertices: Vec<[f32; 3]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    // A primitive shared by several nodes is decoded once.
+    let mut decoded: BTreeMap<(usize, usize), Option<Triangles>> = BTreeMap::new();
+    scene::walk(&document, |node_index, node, world| {
+        let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
+            return Ok(());
+        };
+        let mesh = document.get(&document.root.meshes, mesh_index, "mesh", || {
+            format!("/nodes/{node_index}/mesh")
+        })?;
+        for (primitive_index, primitive) in mesh.primitives.iter().enumerate() {
+            let local = match decoded.entry((mesh_index, primitive_index)) {
+                Entry::Occupied(entry) => entry.into_mut(),
+                Entry::Vacant(entry) => {
+                    entry.insert(document.triangles(mesh_index, primitive_index, primitive)?)
+                }
+            };
+            let Some((positions, local_triangles)) = local else {
+                continue;
+            };
+            if vertices.len() + positions.len() > MAX_MESH_VERTICES
+                || triangles.len() + local_triangles.len() > MAX_MESH_TRIANGLES
+            {
+                return Err(document.error(
+                    format!("/nodes/{node_index}"),
+                    format!(
+                        "the scene's triangle meshes exceed {MAX_MESH_VERTICES} vertices or \
+                         {MAX_MESH_TRIANGLES} triangles (meshes instanced by many nodes?)"
+                    ),
+                ));
+            }
+            // Both counts are bounded far below u32::MAX.
+            let base = vertices.len() as u32;
+            let mirrored = scene::determinant(&world) < 0.0;
+            for &p in positions.iter() {
+                let p = scene::transform(&world, p);
+                if p.iter().any(|c| !c.is_finite()) {
+                    return Err(document.error(
+                        format!("/nodes/{node_index}"),
+                        "the node's transform moves a vertex to a value that is not finite",
+                    ));
+                }
+                vertices.push(p);
+            }
+            triangles.extend(local_triangles.iter().map(|&[a, b, c]| {
+                if mirrored {
+                    [base + a, base + c, base + b]
+                } else {
+                    [base + a, base + b, base + c]
+                }
+            }));
+        }
+        Ok(())
+    })?;
+    Ok((vertices, triangles))
+}
+
+fn empty_like(values: &AttributeValues) -> AttributeValues {
+    match values {
+        AttributeValues::Float(_) => AttributeValues::Float(Vec::new()),
+        AttributeValues::Vec2(_) => AttributeValues::Vec2(Vec::new()),
+        AttributeValues::Vec3(_) => AttributeValues::Vec3(Vec::new()),
+        AttributeValues::Int(_) => AttributeValues::Int(Vec::new()),
+    }
+}
+
+fn same_type(a: &AttributeValues, b: &AttributeValues) -> bool {
+    std::mem::discriminant(a) == std::mem::discriminant(b)
+}
+
+fn append_selected(into: &mut AttributeValues, from: &AttributeValues, indices: &[usize]) {
+    match (into, from) {
+        (AttributeValues::Float(o), AttributeValues::Float(s)) => {
+            o.extend(indices.iter().filter_map(|&i| s.get(i)))
+        }
+        (AttributeValues::Vec2(o), AttributeValues::Vec2(s)) => {
+            o.extend(indices.iter().filter_map(|&i| s.get(i)))
+        }
+        (AttributeValues::Vec3(o), AttributeValues::Vec3(s)) => {
+            o.extend(indices.iter().filter_map(|&i| s.get(i)))
+        }
+        (AttributeValues::Int(o), AttributeValues::Int(s)) => {
+            o.extend(indices.iter().filter_map(|&i| s.get(i)))
+        }
+        _ => {}
+    }
+}
