@@ -8,11 +8,16 @@
 //! The groom becomes one mesh with one `LINES` primitive (a segment per pair
 //! of consecutive strand points; a one-point strand is a segment from its
 //! point to itself), in metres and Y up as glTF requires.
-//! Vertex attributes are `_NAME` accessors (upper-case name; per-strand
-//! attributes are repeated on their strand's vertices). Each attribute
-//! accessor's `extras.groombake` keeps what glTF cannot say: the attribute's
-//! own name (case and all), its scope (`vertex` or `strand`), and for
-//! integers stored as floats or split into two u16, `"type": "int"` and the
+//! The root UVs (`root_uv`, 2 floats) are `TEXCOORD_0`, which every glTF
+//! client reads, with V flipped to glTF's top-left texture origin. Other
+//! attributes are `_NAME` accessors (upper-case name; per-strand attributes
+//! are repeated on their strand's vertices) of 1, 3 or 4 components only:
+//! Blender 5.0.1's importer fails on a 2-component custom attribute beside
+//! 1-component ones, so a 2-vector is written as a VEC3 with z = 0.
+//! Each attribute accessor's `extras.groombake` keeps what glTF cannot say:
+//! the attribute's own name (case and all), its scope (`vertex` or
+//! `strand`), `"type": "vec2"` for a 2-vector in a VEC3, and for integers
+//! stored as floats or as their four bytes, `"type": "int"` and the
 //! encoding. Animation is one
 //! morph target per frame (POSITION deltas from the rest pose) and a STEP
 //! sampler of the mesh weights that switches target k fully on at frame k's
@@ -42,8 +47,12 @@ const URI_PLACEHOLDER: &str = "@groombake-buffer@";
 const DATA_URI_PREFIX: &str = "data:application/octet-stream;base64,";
 /// The key of the attribute accessors' extras (read by the importer).
 const EXTRAS_KEY: &str = "groombake";
-/// The extras' encoding of 32-bit integers as VEC2 of UNSIGNED_SHORT.
-const INT_AS_U16X2: &str = "i32_as_u16x2";
+/// The extras' encoding of 32-bit integers as VEC4 of UNSIGNED_BYTE (the
+/// integer's little-endian bytes).
+const INT_AS_U8X4: &str = "i32_as_u8x4";
+/// The attribute that goes to `TEXCOORD_0`.
+const ROOT_UV: &str = "root_uv";
+const UNSIGNED_BYTE: u32 = 5121;
 
 /// A vertex attribute laid out for the buffer.
 struct EncodedAttribute {
@@ -194,7 +203,13 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                     .collect(),
             }
         };
-        let semantic = semantic_for(&attribute.name, &mut taken);
+        let root_uv =
+            attribute.name == ROOT_UV && matches!(attribute.values, AttributeValues::Vec2(_));
+        let semantic = if root_uv {
+            "TEXCOORD_0".to_string()
+        } else {
+            semantic_for(&attribute.name, &mut taken)
+        };
         let mut marker = json!({
             "name": attribute.name,
             "scope": match attribute.scope {
@@ -215,7 +230,31 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
         };
         encoded.push(match &attribute.values {
             AttributeValues::Float(_) => floats("SCALAR", 1, marker),
-            AttributeValues::Vec2(_) => floats("VEC2", 2, marker),
+            AttributeValues::Vec2(uv) if root_uv => {
+                let flipped: Vec<f32> = uv.iter().flat_map(|&[u, v]| [u, 1.0 - v]).collect();
+                let values = per_vertex(&flipped, 2);
+                EncodedAttribute {
+                    semantic: semantic.clone(),
+                    component_type: FLOAT,
+                    accessor_type: "VEC2",
+                    stride: 8,
+                    bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                    extras: json!({ EXTRAS_KEY: marker }),
+                }
+            }
+            AttributeValues::Vec2(values) => {
+                marker["type"] = json!("vec2");
+                let padded: Vec<f32> = values.iter().flat_map(|&[x, y]| [x, y, 0.0]).collect();
+                let values = per_vertex(&padded, 3);
+                EncodedAttribute {
+                    semantic: semantic.clone(),
+                    component_type: FLOAT,
+                    accessor_type: "VEC3",
+                    stride: 12,
+                    bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                    extras: json!({ EXTRAS_KEY: marker }),
+                }
+            }
             AttributeValues::Vec3(_) => floats("VEC3", 3, marker),
             AttributeValues::Int(values) => {
                 let values: Vec<i32> = match attribute.scope {
@@ -228,8 +267,8 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                 };
                 // glTF has no 32-bit signed components: 16-bit when the
                 // values fit (padded to 4-byte elements), float when every
-                // value is exact as a float, otherwise the 32 bits as two
-                // u16 (VEC2, low half first), marked in the extras.
+                // value is exact as a float, otherwise the 32 bits as four
+                // bytes (VEC4, little-endian), marked in the extras.
                 let fits_short = values.iter().all(|&v| i16::try_from(v).is_ok());
                 let fits_ushort = values.iter().all(|&v| u16::try_from(v).is_ok());
                 let fits_float = values
@@ -259,11 +298,11 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                     floats("SCALAR", 1, marker)
                 } else {
                     marker["type"] = json!("int");
-                    marker["encoding"] = json!(INT_AS_U16X2);
+                    marker["encoding"] = json!(INT_AS_U8X4);
                     EncodedAttribute {
                         semantic,
-                        component_type: UNSIGNED_SHORT,
-                        accessor_type: "VEC2",
+                        component_type: UNSIGNED_BYTE,
+                        accessor_type: "VEC4",
                         stride: 4,
                         bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
                         extras: json!({ EXTRAS_KEY: marker }),

@@ -367,9 +367,11 @@ fn attribute_types_scopes_and_names_survive_gltf() {
             "group",
             AttributeValues::Int((0..n as i32).map(|i| i - 3).collect()),
         ),
+        // TEXCOORD_0 holds 1 - v (glTF's texture origin is top left); these
+        // values are exact both ways (others come back within 6e-8).
         Attribute::per_strand(
             "root_uv",
-            AttributeValues::Vec2(vec![[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]),
+            AttributeValues::Vec2(vec![[0.1, 0.5], [0.3, 0.75], [0.5, 0.625]]),
         ),
         // Beyond 16 bits but exact as floats; beyond 2^24: split in two u16.
         Attribute::per_strand(
@@ -471,5 +473,54 @@ fn every_cut_of_every_format_is_an_error_not_a_panic() {
                 assert!(result.is_err(), "{ext} cut at {cut} was accepted");
             }
         }
+    }
+}
+
+#[test]
+fn gltf_root_uv_is_texcoord_0_and_custom_attributes_have_1_3_or_4_components() {
+    let dir = Scratch::new();
+    let mut groom = sample_groom();
+    let n = groom.vertex_count();
+    groom.set_attribute(Attribute::per_strand(
+        "root_uv",
+        AttributeValues::Vec2(vec![[0.25, 0.75], [0.5, 0.5], [1.0, 0.0]]),
+    ));
+    groom.set_attribute(Attribute::new(
+        "flow",
+        AttributeValues::Vec2((0..n).map(|i| [i as f32, -(i as f32)]).collect()),
+    ));
+    groom.set_attribute(Attribute::new(
+        "seed",
+        AttributeValues::Int((0..n as i32).map(|i| i32::MIN + i).collect()),
+    ));
+    let path = dir.path("uv.gltf");
+    write(&path, &groom).unwrap();
+    let document: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let primitive = &document["meshes"][0]["primitives"][0];
+    let accessors = document["accessors"].as_array().unwrap();
+    let attributes = primitive["attributes"].as_object().unwrap();
+    let uv = &accessors[attributes["TEXCOORD_0"].as_u64().unwrap() as usize];
+    assert_eq!(
+        (uv["type"].as_str(), uv["componentType"].as_u64()),
+        (Some("VEC2"), Some(5126))
+    );
+    for (semantic, index) in attributes {
+        if semantic.starts_with('_') {
+            let kind = accessors[index.as_u64().unwrap() as usize]["type"]
+                .as_str()
+                .unwrap();
+            assert!(
+                matches!(kind, "SCALAR" | "VEC3" | "VEC4"),
+                "{semantic}: {kind}"
+            );
+        }
+    }
+    assert!(!attributes.contains_key("_ROOT_UV"));
+    let back = importers::read(&path).unwrap();
+    // V is flipped on the way out (glTF's origin is top left) and back in:
+    // the values chosen are exact both ways.
+    for name in ["root_uv", "flow", "seed"] {
+        assert_eq!(back.attribute(name), groom.attribute(name), "{name}");
     }
 }
