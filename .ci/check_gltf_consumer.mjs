@@ -4,8 +4,9 @@
 // file it checks what a client would get: every attribute the JSON names
 // (TEXCOORD_0 and the custom `_NAME` attributes) is loaded with one element
 // per vertex and finite values, custom attributes have 1, 3 or 4
-// components (Blender 5.0.1's importer fails on 2-component ones beside
-// 1-component ones), every morph target is loaded with a POSITION per
+// components and one width within a primitive (Blender 5.0.1's importer
+// pairs custom attributes with their data in two different orders, a list
+// and a set, so mixed widths fail or swap names), every morph target is loaded with a POSITION per
 // vertex, and the animations keep their channels.
 //
 //   node .ci/check_gltf_consumer.mjs DIR
@@ -92,6 +93,14 @@ for (const name of files) {
         } else if (!Array.from(array).every(Number.isFinite)) {
           problems.push(`${where}: ${semantic} has values that are not finite`);
         }
+      }
+      const widths = new Set(
+        Object.keys(rawPrimitive.attributes ?? {})
+          .filter((semantic) => semantic.startsWith("_"))
+          .map((semantic) => primitive.getAttribute(semantic)?.getElementSize()),
+      );
+      if (widths.size > 1) {
+        problems.push(`${where}: custom attributes of different widths (${[...widths].join(", ")})`);
       }
       const rawTargets = rawPrimitive.targets ?? [];
       const loaded = primitive.listTargets();

@@ -10,15 +10,18 @@
 //! point to itself), in metres and Y up as glTF requires.
 //! The root UVs (`root_uv`, 2 floats) are `TEXCOORD_0`, which every glTF
 //! client reads, with V flipped to glTF's top-left texture origin. Other
-//! attributes are `_NAME` accessors (upper-case name; per-strand attributes
-//! are repeated on their strand's vertices) of 1, 3 or 4 components only:
-//! Blender 5.0.1's importer fails on a 2-component custom attribute beside
-//! 1-component ones, so a 2-vector is written as a VEC3 with z = 0.
+//! attributes are scalar `_NAME` accessors (upper-case name; per-strand
+//! attributes are repeated on their strand's vertices): a 2- or 3-vector is
+//! one accessor per component (`_NAME_X`, `_NAME_Y`, `_NAME_Z`), integers
+//! are floats (two accessors of their u16 halves, `_NAME_LO` and `_NAME_HI`,
+//! beyond 2^24), all FLOAT, which Blender imports. One width for all: Blender 5.0.1's importer pairs custom
+//! attributes with their buffers in two different orders (a list and a
+//! set), so custom attributes of different widths in one primitive fail or
+//! land under each other's names.
 //! Each attribute accessor's `extras.groombake` keeps what glTF cannot say:
 //! the attribute's own name (case and all), its scope (`vertex` or
-//! `strand`), `"type": "vec2"` for a 2-vector in a VEC3, and for integers
-//! stored as floats or as their four bytes, `"type": "int"` and the
-//! encoding. Animation is one
+//! `strand`), the component an accessor holds, and for integers stored as
+//! floats or split, `"type": "int"` and the encoding. //! Animation is one
 //! morph target per frame (POSITION deltas from the rest pose) and a STEP
 //! sampler of the mesh weights that switches target k fully on at frame k's
 //! time.
@@ -38,8 +41,6 @@ use std::path::{Path, PathBuf};
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
-const SHORT: u32 = 5122;
-const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
 const LINES: u32 = 1;
 /// Stands for the base64 payload in the `.gltf` JSON until it is streamed.
@@ -47,12 +48,11 @@ const URI_PLACEHOLDER: &str = "@groombake-buffer@";
 const DATA_URI_PREFIX: &str = "data:application/octet-stream;base64,";
 /// The key of the attribute accessors' extras (read by the importer).
 const EXTRAS_KEY: &str = "groombake";
-/// The extras' encoding of 32-bit integers as VEC4 of UNSIGNED_BYTE (the
-/// integer's little-endian bytes).
-const INT_AS_U8X4: &str = "i32_as_u8x4";
+/// The extras' encoding of 32-bit integers as two scalar accessors of
+/// their u16 halves (low, high).
+const INT_AS_U16_PAIR: &str = "i32_as_u16_pair";
 /// The attribute that goes to `TEXCOORD_0`.
 const ROOT_UV: &str = "root_uv";
-const UNSIGNED_BYTE: u32 = 5121;
 
 /// A vertex attribute laid out for the buffer.
 struct EncodedAttribute {
@@ -203,59 +203,60 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                     .collect(),
             }
         };
-        let root_uv =
-            attribute.name == ROOT_UV && matches!(attribute.values, AttributeValues::Vec2(_));
-        let semantic = if root_uv {
-            "TEXCOORD_0".to_string()
-        } else {
-            semantic_for(&attribute.name, &mut taken)
-        };
-        let mut marker = json!({
+        let marker = json!({
             "name": attribute.name,
             "scope": match attribute.scope {
                 Scope::Vertex => "vertex",
                 Scope::Strand => "strand",
             },
         });
-        let floats = |accessor_type, width, marker: Value| {
-            let values = per_vertex(&attribute.values.to_f32_flat(), width);
+        let scalar = |semantic: String, component_type: u32, bytes: Vec<u8>, marker: Value| {
             EncodedAttribute {
-                semantic: semantic.clone(),
-                component_type: FLOAT,
-                accessor_type,
-                stride: 4 * width,
-                bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                semantic,
+                component_type,
+                accessor_type: "SCALAR",
+                stride: 4,
+                bytes,
                 extras: json!({ EXTRAS_KEY: marker }),
             }
         };
-        encoded.push(match &attribute.values {
-            AttributeValues::Float(_) => floats("SCALAR", 1, marker),
-            AttributeValues::Vec2(uv) if root_uv => {
+        let float_bytes = |values: &[f32]| values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        match &attribute.values {
+            AttributeValues::Vec2(uv) if attribute.name == ROOT_UV => {
                 let flipped: Vec<f32> = uv.iter().flat_map(|&[u, v]| [u, 1.0 - v]).collect();
-                let values = per_vertex(&flipped, 2);
-                EncodedAttribute {
-                    semantic: semantic.clone(),
+                encoded.push(EncodedAttribute {
+                    semantic: "TEXCOORD_0".into(),
                     component_type: FLOAT,
                     accessor_type: "VEC2",
                     stride: 8,
-                    bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
+                    bytes: float_bytes(&per_vertex(&flipped, 2)),
                     extras: json!({ EXTRAS_KEY: marker }),
+                });
+            }
+            AttributeValues::Float(values) => encoded.push(scalar(
+                semantic_for(&attribute.name, &mut taken),
+                FLOAT,
+                float_bytes(&per_vertex(values, 1)),
+                marker,
+            )),
+            AttributeValues::Vec2(_) | AttributeValues::Vec3(_) => {
+                // One scalar accessor per component, `_NAME_X`, `_NAME_Y`
+                // (and `_NAME_Z`), marked with the component's place.
+                let width = attribute.values.components();
+                let flat = per_vertex(&attribute.values.to_f32_flat(), width);
+                for (k, axis) in ["X", "Y", "Z"].iter().take(width).enumerate() {
+                    let mut marker = marker.clone();
+                    marker["component"] = json!(k);
+                    marker["components"] = json!(width);
+                    let column: Vec<f32> = flat.iter().skip(k).step_by(width).copied().collect();
+                    encoded.push(scalar(
+                        semantic_for(&format!("{}_{axis}", attribute.name), &mut taken),
+                        FLOAT,
+                        float_bytes(&column),
+                        marker,
+                    ));
                 }
             }
-            AttributeValues::Vec2(values) => {
-                marker["type"] = json!("vec2");
-                let padded: Vec<f32> = values.iter().flat_map(|&[x, y]| [x, y, 0.0]).collect();
-                let values = per_vertex(&padded, 3);
-                EncodedAttribute {
-                    semantic: semantic.clone(),
-                    component_type: FLOAT,
-                    accessor_type: "VEC3",
-                    stride: 12,
-                    bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
-                    extras: json!({ EXTRAS_KEY: marker }),
-                }
-            }
-            AttributeValues::Vec3(_) => floats("VEC3", 3, marker),
             AttributeValues::Int(values) => {
                 let values: Vec<i32> = match attribute.scope {
                     Scope::Vertex => values.clone(),
@@ -265,53 +266,65 @@ fn encode_attributes(groom: &Groom) -> Vec<EncodedAttribute> {
                         .flat_map(|(&n, &v)| std::iter::repeat_n(v, n as usize))
                         .collect(),
                 };
-                // glTF has no 32-bit signed components: 16-bit when the
-                // values fit (padded to 4-byte elements), float when every
-                // value is exact as a float, otherwise the 32 bits as four
-                // bytes (VEC4, little-endian), marked in the extras.
-                let fits_short = values.iter().all(|&v| i16::try_from(v).is_ok());
-                let fits_ushort = values.iter().all(|&v| u16::try_from(v).is_ok());
-                let fits_float = values
-                    .iter()
-                    .all(|&v| v.unsigned_abs() <= EXACT_FLOAT_INTEGER as u32);
-                if fits_short || fits_ushort {
-                    let mut bytes = Vec::with_capacity(4 * values.len());
-                    for &v in &values {
-                        let two = if fits_short {
-                            (v as i16).to_le_bytes()
-                        } else {
-                            (v as u16).to_le_bytes()
-                        };
-                        bytes.extend_from_slice(&two);
-                        bytes.extend_from_slice(&[0, 0]);
-                    }
-                    EncodedAttribute {
-                        semantic,
-                        component_type: if fits_short { SHORT } else { UNSIGNED_SHORT },
-                        accessor_type: "SCALAR",
-                        stride: 4,
-                        bytes,
-                        extras: json!({ EXTRAS_KEY: marker }),
-                    }
-                } else if fits_float {
-                    marker["type"] = json!("int");
-                    floats("SCALAR", 1, marker)
-                } else {
-                    marker["type"] = json!("int");
-                    marker["encoding"] = json!(INT_AS_U8X4);
-                    EncodedAttribute {
-                        semantic,
-                        component_type: UNSIGNED_BYTE,
-                        accessor_type: "VEC4",
-                        stride: 4,
-                        bytes: values.iter().flat_map(|v| v.to_le_bytes()).collect(),
-                        extras: json!({ EXTRAS_KEY: marker }),
-                    }
-                }
+                encoded.extend(encode_integers(
+                    &attribute.name,
+                    &values,
+                    marker,
+                    &mut taken,
+                ));
             }
-        });
+        }
     }
     encoded
+}
+
+/// Integers as FLOAT scalars, which Blender imports (it drops SHORT and
+/// UNSIGNED_SHORT ones): exact when every value is within 2^24, otherwise
+/// two accessors holding the u16 low and high halves, marked as components
+/// 0 and 1 of an `i32_as_u16_pair`.
+fn encode_integers(
+    name: &str,
+    values: &[i32],
+    mut marker: Value,
+    taken: &mut std::collections::BTreeSet<String>,
+) -> Vec<EncodedAttribute> {
+    let fits_float = values
+        .iter()
+        .all(|&v| v.unsigned_abs() <= EXACT_FLOAT_INTEGER as u32);
+    marker["type"] = json!("int");
+    let scalar =
+        |semantic: String, values: &mut dyn Iterator<Item = f32>, marker: Value| EncodedAttribute {
+            semantic,
+            component_type: FLOAT,
+            accessor_type: "SCALAR",
+            stride: 4,
+            bytes: values.flat_map(f32::to_le_bytes).collect(),
+            extras: json!({ EXTRAS_KEY: marker }),
+        };
+    if fits_float {
+        return vec![scalar(
+            semantic_for(name, taken),
+            &mut values.iter().map(|&v| v as f32),
+            marker,
+        )];
+    }
+    marker["encoding"] = json!(INT_AS_U16_PAIR);
+    marker["components"] = json!(2);
+    [("LO", 0), ("HI", 16)]
+        .into_iter()
+        .enumerate()
+        .map(|(k, (half, shift))| {
+            let mut marker = marker.clone();
+            marker["component"] = json!(k);
+            scalar(
+                semantic_for(&format!("{name}_{half}"), taken),
+                &mut values
+                    .iter()
+                    .map(|&v| ((v as u32 >> shift) & 0xFFFF) as f32),
+                marker,
+            )
+        })
+        .collect()
 }
 
 impl FrameWriter for GltfWriter {

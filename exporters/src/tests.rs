@@ -477,7 +477,7 @@ fn every_cut_of_every_format_is_an_error_not_a_panic() {
 }
 
 #[test]
-fn gltf_root_uv_is_texcoord_0_and_custom_attributes_have_1_3_or_4_components() {
+fn gltf_root_uv_is_texcoord_0_and_custom_attributes_are_scalars() {
     let dir = Scratch::new();
     let mut groom = sample_groom();
     let n = groom.vertex_count();

@@ -202,18 +202,16 @@ impl Document<'_> {
         Ok(self.signed_integers(accessor)?.map(AttributeValues::Int))
     }
 
-    /// 32-bit integers stored as their four little-endian bytes (VEC4 of
-    /// UNSIGNED_BYTE) or, in files of earlier versions, as two u16 (VEC2 of
-    /// UNSIGNED_SHORT, low half first); `None` for other accessor types.
+    /// 32-bit integers stored as a VEC2 of UNSIGNED_SHORT (low half first),
+    /// as earlier groombake versions wrote them; `None` for other accessor types.
     pub fn split_integers(
         &self,
         accessor: &Accessor,
     ) -> Result<Option<AttributeValues>, ImportError> {
-        let split = matches!(
-            (accessor.component, accessor.kind),
-            (ComponentType::U8, Type::Vec4) | (ComponentType::U16, Type::Vec2)
-        );
-        if !split || accessor.json.normalized {
+        if accessor.component != ComponentType::U16
+            || accessor.kind != Type::Vec2
+            || accessor.json.normalized
+        {
             return Ok(None);
         }
         let values = self

@@ -71,6 +71,9 @@ impl Document<'_> {
         };
         let mut attributes = BTreeMap::new();
         let mut per_strand = BTreeSet::new();
+        // Vectors and wide integers the exporter split into one scalar
+        // accessor per component: name -> (marker, components so far).
+        let mut split: BTreeMap<String, (Marker, Vec<Option<AttributeValues>>)> = BTreeMap::new();
         for (semantic, &index) in &primitive.attributes {
             let default_name = match semantic {
                 Checked::Valid(Semantic::Extras(name)) => name.to_lowercase(),
@@ -99,7 +102,29 @@ impl Document<'_> {
             let Some(values) = values else {
                 continue;
             };
-            let name = marker.name.unwrap_or(default_name);
+            match (&marker.name, marker.component, marker.components) {
+                (Some(name), Some(k), Some(n)) if k < n && (2..=3).contains(&n) => {
+                    let entry = split
+                        .entry(name.clone())
+                        .or_insert_with(|| (marker.clone(), vec![None; n]));
+                    if let Some(slot) = entry.1.get_mut(k) {
+                        *slot = Some(values);
+                    }
+                }
+                _ => {
+                    let name = marker.name.clone().unwrap_or(default_name);
+                    if marker.strand && constant_along(&values, &strands) {
+                        per_strand.insert(name.clone());
+                    }
+                    attributes.insert(name, values);
+                }
+            }
+        }
+        for (name, (marker, parts)) in split {
+            // An incomplete or mixed set of parts is left out.
+            let Some(values) = join_components(&marker, parts) else {
+                continue;
+            };
             if marker.strand && constant_along(&values, &strands) {
                 per_strand.insert(name.clone());
             }
@@ -182,12 +207,46 @@ impl Document<'_> {
             None => self.attribute(accessor)?,
         };
         Ok(values.map(|values| match values {
-            AttributeValues::Vec3(v) if marker.vec2 => {
-                AttributeValues::Vec2(v.into_iter().map(|[x, y, _]| [x, y]).collect())
-            }
             values if marker.int => integers_if_exact(values),
             values => values,
         }))
+    }
+}
+
+/// One attribute from the scalar accessors the exporter split it into:
+/// float components into a 2- or 3-vector, the u16 halves of wide integers
+/// into i32.
+fn join_components(
+    marker: &Marker,
+    parts: Vec<Option<AttributeValues>>,
+) -> Option<AttributeValues> {
+    let parts: Vec<AttributeValues> = parts.into_iter().collect::<Option<_>>()?;
+    match parts.as_slice() {
+        [AttributeValues::Int(lo), AttributeValues::Int(hi)]
+            if marker.pair_int && lo.len() == hi.len() =>
+        {
+            Some(AttributeValues::Int(
+                lo.iter()
+                    .zip(hi)
+                    .map(|(&lo, &hi)| ((hi as u32) << 16 | (lo as u32 & 0xFFFF)) as i32)
+                    .collect(),
+            ))
+        }
+        [AttributeValues::Float(x), AttributeValues::Float(y)] if x.len() == y.len() => Some(
+            AttributeValues::Vec2(x.iter().zip(y).map(|(&x, &y)| [x, y]).collect()),
+        ),
+        [AttributeValues::Float(x), AttributeValues::Float(y), AttributeValues::Float(z)]
+            if x.len() == y.len() && y.len() == z.len() =>
+        {
+            Some(AttributeValues::Vec3(
+                x.iter()
+                    .zip(y)
+                    .zip(z)
+                    .map(|((&x, &y), &z)| [x, y, z])
+                    .collect(),
+            ))
+        }
+        _ => None,
     }
 }
 
@@ -225,15 +284,18 @@ pub(super) fn chain_segments(indices: &[usize]) -> Vec<Vec<usize>> {
 
 /// What groombake's exporter keeps in an attribute accessor's
 /// `extras.groombake`; all unset for other files.
-#[derive(Default)]
+#[derive(Default, Clone)]
 struct Marker {
     name: Option<String>,
     strand: bool,
     int: bool,
+    /// i32 as a VEC2 of u16 (files of earlier versions).
     split_int: bool,
-    /// A 2-component attribute written as VEC3 (z = 0): Blender's importer
-    /// fails on 2-component custom attributes beside 1-component ones.
-    vec2: bool,
+    /// i32 as two u16 scalar accessors (components 0 and 1).
+    pair_int: bool,
+    /// Which component of a split attribute the accessor holds, of how many.
+    component: Option<usize>,
+    components: Option<usize>,
 }
 
 impl Marker {
@@ -245,6 +307,7 @@ impl Marker {
             return Marker::default();
         };
         let marker = &extras["groombake"];
+        let index = |key: &str| marker[key].as_u64().and_then(|v| usize::try_from(v).ok());
         Marker {
             name: marker["name"]
                 .as_str()
@@ -252,8 +315,10 @@ impl Marker {
                 .map(String::from),
             strand: marker["scope"] == "strand",
             int: marker["type"] == "int",
-            split_int: marker["encoding"] == "i32_as_u8x4" || marker["encoding"] == "i32_as_u16x2",
-            vec2: marker["type"] == "vec2",
+            split_int: marker["encoding"] == "i32_as_u16x2",
+            pair_int: marker["encoding"] == "i32_as_u16_pair",
+            component: index("component"),
+            components: index("components"),
         }
     }
 }

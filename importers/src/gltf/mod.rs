@@ -10,7 +10,8 @@
 //! case), unless the accessor's `extras.groombake` (written by groombake's
 //! exporter) gives the name, says the attribute is per strand (taken from
 //! each strand's first vertex, if every strand's values agree), says float
-//! or split-byte values are 32-bit integers, or says a VEC3 holds a 2-vector.
+//! or split values are 32-bit integers, or says which component of a
+//! vector (or which half of an integer) the accessor holds.
 //! glTF is metres and Y up.
 //!
 //! The parts: [`document`] turns bytes into a document whose every index
