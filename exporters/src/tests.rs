@@ -524,3 +524,17 @@ fn gltf_root_uv_is_texcoord_0_and_custom_attributes_are_scalars() {
         assert_eq!(back.attribute(name), groom.attribute(name), "{name}");
     }
 }
+
+#[test]
+fn usda_writes_large_and_tiny_floats_in_exponent_form() {
+    let dir = Scratch::new();
+    let mut groom = Groom::from_strands([vec![[0.0, 0.0, 0.0], [1e30, 2.5e-7, -3.0e20]]]);
+    groom.units = Units::METERS;
+    let path = dir.path("big.usda");
+    write(&path, &groom).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("(1e30, 2.5e-7, -3e20)"), "{text}");
+    assert!(!text.contains("000000000000"), "{text}");
+    let back = importers::read(&path).unwrap();
+    assert_eq!(back.points, groom.points);
+}

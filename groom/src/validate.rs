@@ -34,6 +34,8 @@ pub enum ProblemKind {
 pub struct Problem {
     pub kind: ProblemKind,
     pub strand: Option<usize>,
+    /// The vertex's index within `strand` (0 = root), as the message
+    /// "strand S, vertex V" reads; the groom-wide index if no strand is known.
     pub vertex: Option<usize>,
     pub frame: Option<usize>,
 }
@@ -126,7 +128,7 @@ impl Groom {
             }
             let end = start.saturating_add(count as usize).min(self.points.len());
             if start < end {
-                push_non_finite(&mut problems, &self.points[start..end], start, strand, None);
+                push_non_finite(&mut problems, &self.points[start..end], strand, None);
             }
             start = end;
         }
@@ -145,7 +147,14 @@ impl Groom {
             }
             if let Some(index) = attribute.values.first_non_finite() {
                 let (strand, vertex) = match attribute.scope {
-                    Scope::Vertex => (self.strand_of_vertex(index), Some(index)),
+                    Scope::Vertex => match self
+                        .strand_ranges()
+                        .enumerate()
+                        .find(|(_, r)| r.contains(&index))
+                    {
+                        Some((strand, range)) => (Some(strand), Some(index - range.start)),
+                        None => (None, Some(index)),
+                    },
                     Scope::Strand => (Some(index), None),
                 };
                 problems.push(Problem {
@@ -169,13 +178,7 @@ impl Groom {
                 });
             } else {
                 for (strand, range) in self.strand_ranges().enumerate() {
-                    push_non_finite(
-                        &mut problems,
-                        &frame.points[range.clone()],
-                        range.start,
-                        strand,
-                        Some(index),
-                    );
+                    push_non_finite(&mut problems, &frame.points[range], strand, Some(index));
                 }
             }
             if frame.time.is_nan() || frame.time <= previous_time {
@@ -215,7 +218,6 @@ impl Groom {
 fn push_non_finite(
     problems: &mut Vec<Problem>,
     points: &[[f32; 3]],
-    first_index: usize,
     strand: usize,
     frame: Option<usize>,
 ) {
@@ -223,7 +225,7 @@ fn push_non_finite(
         if !p.iter().all(|c| c.is_finite()) {
             problems.push(Problem {
                 strand: Some(strand),
-                vertex: Some(first_index + offset),
+                vertex: Some(offset),
                 frame,
                 ..Problem::new(ProblemKind::NonFinitePoint)
             });
@@ -254,13 +256,42 @@ mod tests {
             text,
             vec![
                 "strand 0: strand has a single point (no hair at this root)",
-                "strand 1, vertex 2: point is not finite",
+                // Vertex 1 of strand 1 (the groom's third point).
+                "strand 1, vertex 1: point is not finite",
                 "attribute 'width' has 1 values, expected 3",
                 "frame 0: frame has 2 points, expected 3",
             ]
         );
         assert!(!problems[0].is_fatal());
         assert!(problems[1].is_fatal());
+    }
+
+    #[test]
+    fn problems_name_the_vertex_by_its_index_within_the_strand() {
+        let mut groom = Groom::from_strands([
+            vec![[0.0; 3], [0.0, 1.0, 0.0], [0.0, 2.0, 0.0]],
+            vec![[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 2.0, 0.0]],
+        ]);
+        groom.attributes.push(Attribute::new(
+            "width",
+            AttributeValues::Float(vec![1.0, 1.0, 1.0, 1.0, f32::INFINITY, 1.0]),
+        ));
+        groom.frames.push(Frame {
+            time: 0.0,
+            points: {
+                let mut points = groom.points.clone();
+                points[5][1] = f32::NAN;
+                points
+            },
+        });
+        let text: Vec<String> = groom.validate().iter().map(|p| p.to_string()).collect();
+        assert_eq!(
+            text,
+            vec![
+                "strand 1, vertex 1: attribute 'width' has a value that is not finite",
+                "frame 0, strand 1, vertex 2: point is not finite",
+            ]
+        );
     }
 
     #[test]

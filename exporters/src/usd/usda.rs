@@ -35,13 +35,13 @@ fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
     header.push_str("    doc = \"Written by groombake\"\n");
     if let (Some(timing), Some((start, end))) = (scene.timing, range) {
-        let _ = writeln!(header, "    endTimeCode = {end}");
-        let _ = writeln!(header, "    framesPerSecond = {}", timing.fps);
-        let _ = writeln!(header, "    metersPerUnit = {}", scene.meters_per_unit);
-        let _ = writeln!(header, "    startTimeCode = {start}");
-        let _ = writeln!(header, "    timeCodesPerSecond = {}", timing.fps);
+        let _ = writeln!(header, "    endTimeCode = {}", Num(end));
+        let _ = writeln!(header, "    framesPerSecond = {}", Num(timing.fps));
+        let _ = writeln!(header, "    metersPerUnit = {}", Num(scene.meters_per_unit));
+        let _ = writeln!(header, "    startTimeCode = {}", Num(start));
+        let _ = writeln!(header, "    timeCodesPerSecond = {}", Num(timing.fps));
     } else {
-        let _ = writeln!(header, "    metersPerUnit = {}", scene.meters_per_unit);
+        let _ = writeln!(header, "    metersPerUnit = {}", Num(scene.meters_per_unit));
     }
     let _ = writeln!(header, "    upAxis = \"{}\"", scene.up_axis);
     header.push_str(")\n\n");
@@ -74,10 +74,10 @@ fn write_property(text: &mut String, property: &Property) {
             let _ = write!(t, "{v}");
         }),
         PropertyValue::Floats(values) => write_list(text, values, |t, v| {
-            let _ = write!(t, "{v}");
+            let _ = write!(t, "{}", Num(*v));
         }),
         PropertyValue::Float2s(values) => write_list(text, values, |t, v| {
-            let _ = write!(t, "({}, {})", v[0], v[1]);
+            let _ = write!(t, "({}, {})", Num(v[0]), Num(v[1]));
         }),
         PropertyValue::Float3s(values) => write_float3s(text, values),
     }
@@ -92,8 +92,24 @@ fn write_property(text: &mut String, property: &Property) {
 
 fn write_float3s(text: &mut String, values: &[[f32; 3]]) {
     write_list(text, values, |t, v| {
-        let _ = write!(t, "({}, {}, {})", v[0], v[1], v[2]);
+        let _ = write!(t, "({}, {}, {})", Num(v[0]), Num(v[1]), Num(v[2]));
     });
+}
+
+/// A number as USD text: the shortest digits that read back to the same
+/// value, in exponent form where the plain form is long (Rust writes 1e30
+/// as a 31-digit integer, which usd-core warns about) or tiny.
+struct Num<T>(T);
+
+impl<T: Copy + Into<f64> + std::fmt::Display + std::fmt::LowerExp> std::fmt::Display for Num<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let magnitude = self.0.into().abs();
+        if magnitude != 0.0 && !(1e-5..1e16).contains(&magnitude) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
 }
 
 fn write_list<T>(text: &mut String, values: &[T], mut item: impl FnMut(&mut String, &T)) {
@@ -192,7 +208,7 @@ impl FrameWriter for AnimatedUsda {
         }
         self.extents.push((code, self.scene.extent(&frame.points)));
         self.line.clear();
-        let _ = write!(self.line, "            {code}: ");
+        let _ = write!(self.line, "            {}: ", Num(code));
         write_float3s(&mut self.line, &frame.points);
         self.line.push_str(",\n");
         let line = std::mem::take(&mut self.line);
@@ -216,7 +232,7 @@ impl FrameWriter for AnimatedUsda {
         };
         let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
         for (code, extent) in &this.extents {
-            let _ = write!(tail, "            {code}: ");
+            let _ = write!(tail, "            {}: ", Num(*code));
             write_float3s(&mut tail, extent);
             tail.push_str(",\n");
         }
