@@ -115,8 +115,13 @@ impl Document<'_> {
         let times = times.unwrap_or_default();
         let vertices: usize = pieces.iter().map(|p| decoded[p.lines].point_count()).sum();
         // Few morph targets can drive many keyframes: bound what the frames
-        // would take before allocating them.
-        if (times.len() as u64).saturating_mul(vertices as u64) > MAX_FRAME_POINTS {
+        // would take, by a fixed limit and by the bytes the file has, before
+        // allocating them.
+        let frame_points = (times.len() as u64).saturating_mul(vertices as u64);
+        self.charge(frame_points.saturating_mul(12), || {
+            format!("/animations/{animation_index}")
+        })?;
+        if frame_points > MAX_FRAME_POINTS {
             return Err(self.error(
                 format!("/animations/{animation_index}"),
                 format!(

@@ -125,7 +125,8 @@ impl<'a> Document<'a> {
                 place(),
                 format!(
                     "the file's references ask to decode more than {DECODE_FACTOR} times its \
-                     bytes (an accessor referenced very many times?)"
+                     bytes (an accessor referenced very many times, or many keyframes of \
+                     many points?)"
                 ),
             ));
         }

@@ -626,3 +626,51 @@ fn one_accessor_referenced_very_often_is_refused_not_decoded_each_time() {
     let error = error_of(&json);
     assert!(error.contains("more than 8 times its bytes"), "{error}");
 }
+
+#[test]
+fn keyframes_times_points_beyond_the_files_bytes_are_refused_before_allocating() {
+    // 3,000,000 keyframes (12 MB of times) of 7 points would be 252 MB of
+    // frames: more than the file's bytes back.
+    let keys = 3_000_000usize;
+    let (_, mut bin) = hand_made(None);
+    let times_at = bin.len();
+    for k in 0..keys {
+        bin.extend_from_slice(&(k as f32).to_le_bytes());
+    }
+    let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+    let json = hand_made(Some(&format!(
+        "data:application/octet-stream;base64,{payload}"
+    )))
+    .0
+    .replacen(r#""byteLength":172"#, &format!(r#""byteLength":{}"#, bin.len()), 1)
+    .replacen(
+        r#"{"buffer":0,"byteOffset":84,"byteLength":8}"#,
+        &format!(r#"{{"buffer":0,"byteOffset":{times_at},"byteLength":{}}}"#, 4 * keys),
+        1,
+    )
+    .replacen(
+        r#""componentType":5126,"count":2,"type":"SCALAR"}"#,
+        &format!(r#""componentType":5126,"count":{keys},"type":"SCALAR"}}"#),
+        1,
+    )
+    .replacen(
+        r#"{"bufferView":4,"componentType":5126,"count":2,"#,
+        &format!(r#"{{"bufferView":8,"componentType":5126,"count":{keys},"#),
+        1,
+    )
+    .replacen(
+        r#"{"buffer":0,"byteOffset":156,"byteLength":16}"#,
+        &format!(
+            r#"{{"buffer":0,"byteOffset":156,"byteLength":16}},{{"buffer":0,"byteOffset":{times_at},"byteLength":{}}}"#,
+            4 * keys
+        ),
+        1,
+    );
+    let error = error_of(&json);
+    assert!(
+        error.starts_with(
+            "t.gltf:/animations/0: the file's references ask to decode more than 8 times"
+        ),
+        "{error}"
+    );
+}
