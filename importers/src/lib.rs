@@ -141,3 +141,35 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 pub fn read_bytes(path: &Path) -> Result<Vec<u8>, ImportError> {
     std::fs::read(path).map_err(|e| ImportError::io(path, e))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn control_bytes_from_a_file_are_escaped_in_its_error() {
+        let cases: [(&str, &[u8], &str); 2] = [
+            (
+                "bad.obj",
+                b"v 0 0 0\nv 1 \x1b[31mX\x00 0\nl 1 2\n",
+                r"bad.obj:2:5: '\u{1b}[31mX\u{0}' is not a number",
+            ),
+            (
+                "bad.usda",
+                b"#usda 1.0\ndef BasisCurves \"a\x07b\" {\n}\n",
+                r"bad.usda:2:17: 'a\u{7}b' is not a valid prim name",
+            ),
+        ];
+        for (name, bytes, expected) in cases {
+            let path = Path::new(name);
+            let error = match extension_of(path).as_str() {
+                "obj" => obj::parse(path, bytes).map(|_| ()),
+                _ => usd::read_bytes(path, bytes).map(|_| ()),
+            }
+            .unwrap_err()
+            .to_string();
+            assert_eq!(error, expected);
+            assert!(!error.chars().any(char::is_control), "{error:?}");
+        }
+    }
+}
