@@ -68,6 +68,12 @@ impl Timeline {
             column: 0,
             message: format!("cannot read the timeline: {e}"),
         })?;
+        Timeline::parse(path, text)
+    }
+
+    /// Parses and checks a timeline's text; `path` names it in errors and
+    /// is the folder its relative paths start from.
+    pub fn parse(path: &Path, text: String) -> Result<Timeline, TimelineError> {
         let file: TimelineFile = toml::from_str(&text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             error_at(path, &text, span, e.message().trim().to_string())

@@ -1,0 +1,10 @@
+//! The .hair reader on arbitrary bytes: it must return a groom or an error,
+//! never panic, hang or allocate without bound.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = importers::hair::parse(Path::new("fuzz.hair"), data);
+});
