@@ -403,3 +403,43 @@ fn reference_cycle_is_an_error() {
     let message = dir.run_fail(&["inspect", "a.usda"], 2);
     assert!(message.contains("a cycle?"), "{message}");
 }
+
+/// Every fixture converts to `.usda` and `.usdc` that usd-core's validators
+/// pass, keeping the counts, the wrap (pinned stays pinned) and each
+/// primvar's declared type (`color3f[]`, `texCoord2f[]`).
+#[test]
+fn fixtures_convert_keeping_wrap_and_declared_types() {
+    let dir = TestDir::new();
+    for (name, counts) in COMPOSED_FIXTURES {
+        let source = usd_fixture(name);
+        let stem = name.trim_end_matches(".usda");
+        for ext in ["usda", "usdc"] {
+            let out = format!("{stem}.{ext}");
+            dir.run_ok(&["convert", source.to_str().unwrap(), &out]);
+            let back = importers::read(&dir.path(&out)).unwrap();
+            assert_eq!(back.strand_vertex_counts, counts, "{out}");
+            let points: u32 = counts.iter().sum();
+            hand_to_validators(
+                &dir.path(&out),
+                &format!("usd_fixture_{stem}_{ext}"),
+                json!({"curves": counts.len(), "points": points}),
+            );
+        }
+    }
+    let text = std::fs::read_to_string(dir.path("pinned_wrap.usda")).unwrap();
+    assert!(text.contains("uniform token wrap = \"pinned\""), "{text}");
+    let text = std::fs::read_to_string(dir.path("color3f.usda")).unwrap();
+    assert!(
+        text.contains("color3f[] primvars:displayColor")
+            && text.contains("texCoord2f[] primvars:st"),
+        "{text}"
+    );
+    let back = importers::read(&dir.path("color3f.usdc")).unwrap();
+    assert_eq!(
+        back.provenance
+            .metadata
+            .get("usd.type.displayColor")
+            .map(String::as_str),
+        Some("color3f[]")
+    );
+}

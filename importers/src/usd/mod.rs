@@ -424,7 +424,11 @@ struct CurveSet {
     /// `(time code, points)` for each time sample of `points`.
     samples: Vec<(f64, Vec<[f32; 3]>)>,
     basis: CurveBasis,
+    /// `wrap`: nonperiodic, periodic or pinned.
+    wrap: String,
     attributes: Vec<Attribute>,
+    /// The USD type each attribute was declared with (`color3f[]`, ...).
+    declared_types: Vec<(String, String)>,
     notes: Vec<String>,
 }
 
@@ -551,13 +555,11 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         points,
         samples,
         basis,
+        wrap: token("wrap").unwrap_or_else(|| "nonperiodic".into()),
         attributes: Vec::new(),
+        declared_types: Vec::new(),
         notes: Vec::new(),
     };
-    // The groom has no wrap: the control points are kept as they are.
-    if let Some(wrap) = token("wrap").filter(|w| w != "nonperiodic") {
-        set.notes.push(format!("wrap {wrap} read as nonperiodic"));
-    }
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()
@@ -578,7 +580,11 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             .and_then(|a| a.static_value())
             .and_then(|v| v.numbers(1));
         match primvar(file, attribute, &name, indices, &set)? {
-            Ok(converted) => set.attributes.push(converted),
+            Ok(converted) => {
+                set.declared_types
+                    .push((name.clone(), attribute.type_name.clone()));
+                set.attributes.push(converted)
+            }
             Err(note) => set.notes.push(note),
         }
     }
@@ -865,6 +871,30 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     } else {
         bases.first().copied().unwrap_or_default()
     };
+
+    // The wrap and each attribute's declared type go to the provenance, for
+    // the USD writer to keep them (`usd.wrap`, `usd.type.<attribute>`).
+    let wraps: Vec<&str> = sets.iter().map(|(_, s)| s.wrap.as_str()).collect();
+    if wraps.windows(2).any(|w| w[0] != w[1]) {
+        groom
+            .provenance
+            .metadata
+            .insert("usd.wrap".into(), "mixed".into());
+    } else if let Some(&wrap) = wraps.first().filter(|&&w| w != "nonperiodic") {
+        groom
+            .provenance
+            .metadata
+            .insert("usd.wrap".into(), wrap.into());
+    }
+    for (_, set) in &sets {
+        for (name, type_name) in &set.declared_types {
+            groom
+                .provenance
+                .metadata
+                .entry(format!("usd.type.{name}"))
+                .or_insert_with(|| type_name.clone());
+        }
+    }
 
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
