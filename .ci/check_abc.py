@@ -20,6 +20,9 @@ must hold; its keys, all optional:
   width         scope of the widths: "vertex", "uniform" or "constant"
   unreal_groom  true: Unreal's groom attributes must be in .arbGeomParams
   kind          "abc" (ignored: says which validator the file is for)
+  scaled        {"of": "other.abc", "by": k}: every point (sample 0) is the
+                other file's point times k, to 1e-6 relative (the units
+                check: the same groom written in m and in cm)
 
 Exits 1 on any failure, and when the directory holds no .abc file.
 """
@@ -113,6 +116,7 @@ def check_curves(obj, file_name, failures, totals):
             if any(not math.isfinite(w) or w < 0 for w in widths):
                 failures.add(where, f"sample {index}: a width is negative or not finite")
         if index == 0:
+            totals["positions"].extend(tuple(p) for p in positions)
             totals["curves"] += len(counts)
             totals["points"] += len(positions)
             totals["basis"].add(
@@ -132,6 +136,38 @@ def check_curves(obj, file_name, failures, totals):
     totals["arbitrary"].append(names)
 
 
+def sample_zero_positions(path):
+    archive = Abc.IArchive(str(path))
+    positions = []
+    for obj in walk(archive.getTop()):
+        if AbcGeom.ICurves.matches(obj.getMetaData()):
+            schema = AbcGeom.ICurves(obj, Abc.WrapExistingFlag.kWrapExisting).getSchema()
+            positions.extend(tuple(p) for p in schema.getValue(Abc.ISampleSelector(0)).getPositions())
+    return positions
+
+
+def check_scaled(path, positions, scaled, failures):
+    other_path = path.with_name(scaled["of"])
+    factor = scaled["by"]
+    where = f"{path.name} vs {other_path.name}"
+    if not other_path.exists():
+        failures.add(where, "the file to compare with is missing")
+        return
+    other = sample_zero_positions(other_path)
+    if len(other) != len(positions):
+        failures.add(where, f"{len(positions)} points against {len(other)}")
+        return
+    worst = 0.0
+    for mine, theirs in zip(positions, other):
+        for a, b in zip(mine, theirs):
+            want = b * factor
+            worst = max(worst, abs(a - want) / max(abs(want), 1e-30))
+    if worst > 1e-6:
+        failures.add(where, f"points are not the other's times {factor}: worst relative error {worst:.3g}")
+    else:
+        print(f"ok   {where}: points are the other's times {factor} (worst relative error {worst:.3g})")
+
+
 def check_file(path, failures):
     name = path.name
     try:
@@ -147,6 +183,7 @@ def check_file(path, failures):
         "basis": set(),
         "width": set(),
         "arbitrary": [],
+        "positions": [],
     }
     paths = set()
     curves_objects = 0
@@ -193,7 +230,12 @@ def check_file(path, failures):
             missing = [a for a in UNREAL_ATTRIBUTES if a not in names]
             if missing:
                 failures.add(name, f"Unreal groom attributes missing from .arbGeomParams: {missing}")
-    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom"}
+    if "scaled" in expect:
+        check_scaled(path, totals["positions"], expect["scaled"], failures)
+    known = {
+        "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
+        "unreal_groom", "scaled",
+    }
     unknown = set(expect) - known
     if unknown:
         failures.add(name, f"unknown expectation keys {sorted(unknown)}")

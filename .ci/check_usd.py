@@ -12,14 +12,17 @@ computes, the time-code range, and the expectations the test wrote beside
 the file in `<file>.expect.json` (keys: curves, points, first_point,
 meters_per_unit, up_axis, basis, time_samples, start_time_code,
 end_time_code, time_codes_per_second, widths, primvars, and sample_points:
-`[time code, point index, [x, y, z]]` items checked in the first curves prim). Exits 1 on any failure or when DIR holds no USD file.
+`[time code, point index, [x, y, z]]` items checked in the first curves prim).
+Every file must also pass all of usd-core's registered validators
+(`UsdValidation.ValidationRegistry().GetOrLoadAllValidators()`) with no
+error. Exits 1 on any failure or when DIR holds no USD file.
 """
 import json
 import math
 import sys
 from pathlib import Path
 
-from pxr import Gf, Sdf, Usd, UsdGeom
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdValidation
 
 EXTENSIONS = {".usda", ".usdc", ".usd"}
 KNOWN_TYPES = {"Xform", "Scope", "BasisCurves"}
@@ -45,6 +48,29 @@ def fits(curves, size, interpolation):
         "vertex": curves.ComputeVertexDataSize(time),
     }.get(interpolation)
     return expected == size
+
+
+_VALIDATION = None
+
+
+def validation_context():
+    """All of usd-core's built-in validators, loaded once."""
+    global _VALIDATION
+    if _VALIDATION is None:
+        validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+        _VALIDATION = (UsdValidation.ValidationContext(validators), len(validators))
+    return _VALIDATION
+
+
+def validator_errors(path):
+    """The errors usd-core's validators report on the file's stage."""
+    context, _ = validation_context()
+    stage = Usd.Stage.Open(str(path))
+    return [
+        f"validator {error.GetName()}: {error.GetMessage()}"
+        for error in context.Validate(stage)
+        if error.GetType() == UsdValidation.ValidationErrorType.Error
+    ]
 
 
 def check_file(path):
@@ -185,7 +211,7 @@ def main():
     failed = 0
     for path in files:
         try:
-            problems = check_file(path)
+            problems = check_file(path) + validator_errors(path)
         except Exception as error:  # usd-core raises on unreadable files
             problems = [f"{type(error).__name__}: {error}"]
         if problems:
@@ -194,7 +220,8 @@ def main():
                 print(f"FAIL {path.name}: {problem}")
         else:
             print(f"ok   {path.name}")
-    print(f"check_usd: {len(files) - failed} of {len(files)} USD files pass")
+    print(f"check_usd: {len(files) - failed} of {len(files)} USD files pass "
+          f"(with {validation_context()[1]} usd-core validators)")
     return 1 if failed else 0
 
 

@@ -13,7 +13,7 @@ pub mod hair;
 pub mod obj;
 pub mod usd;
 
-use groom::{AttributeValues, Frame, Groom, Scope};
+use groom::{AttributeValues, Frame, Groom, Scope, Units};
 use std::path::{Path, PathBuf};
 
 /// Why a file could not be written.
@@ -118,6 +118,47 @@ pub fn animated(
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
+    }
+}
+
+/// The units a file at `path` is written in when the user names none (the
+/// units rule in [`groom::Units`]' module): glTF in metres (its
+/// specification), USD in the groom's own units (it records them), and
+/// `.abc`, `.hair`, `.data`, `.obj` in the centimetres their readers assume.
+pub fn default_units(path: &Path, groom_units: Units) -> Units {
+    match extension_of(path).as_str() {
+        "gltf" | "glb" => Units::METERS,
+        "usda" | "usdc" | "usd" => groom_units,
+        _ => Units::CENTIMETERS,
+    }
+}
+
+/// The units a file at `path` holds when its groom is in `units`: glTF is
+/// always metres (its specification; the writer converts), every other
+/// format holds the groom's units.
+pub fn file_units(path: &Path, units: Units) -> Units {
+    match extension_of(path).as_str() {
+        "gltf" | "glb" => Units::METERS,
+        _ => units,
+    }
+}
+
+/// A warning for units a file at `path` cannot keep as asked: glTF in
+/// anything but metres, and `.hair` and `.data` (which record no units) in
+/// anything but the centimetres their readers assume. `None` when the file
+/// reads back in the units asked.
+pub fn units_warning(path: &Path, units: Units) -> Option<String> {
+    let extension = extension_of(path);
+    match extension.as_str() {
+        "gltf" | "glb" if units != Units::METERS => Some(format!(
+            "{}: glTF is in metres by its specification; written in m, not {units}",
+            path.display()
+        )),
+        "hair" | "data" if units != Units::CENTIMETERS => Some(format!(
+            "{}: written in {units}, which a .{extension} file cannot record; read it back with --source-units {units}",
+            path.display()
+        )),
+        _ => None,
     }
 }
 

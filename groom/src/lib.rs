@@ -13,7 +13,7 @@ mod validate;
 
 pub use atomic::AtomicFile;
 pub use attributes::{Attribute, AttributeValues, Scope};
-pub use units::{Units, UpAxis};
+pub use units::{Units, UpAxis, ALEMBIC_UNITS_KEY};
 pub use validate::{Problem, ProblemKind};
 
 use std::path::PathBuf;
@@ -54,6 +54,11 @@ pub struct Provenance {
     pub format: String,
     /// Free text a format carries (the `.hair` info field, an Alembic application name).
     pub info: String,
+    /// Which rule of the units rule (see [`Units`]) gave [`Groom::units`]:
+    /// `file` (the file records them), `application <name>` (an Alembic
+    /// archive's writing application), `format` (the convention of a format
+    /// that records none), `stated` (`--source-units` or `[groom] units`).
+    pub units_source: String,
     /// Facts about the source file a reader keeps so that its writer can
     /// reproduce the file exactly (header fields the groom has no place
     /// for), keyed `<format>.<field>`. A writer honours them only while the

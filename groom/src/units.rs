@@ -1,7 +1,25 @@
 //! Length units and up axes.
+//!
+//! The units rule, applied by every importer and exporter:
+//! - A reader takes the units the file records: USD's `metersPerUnit`, glTF's
+//!   metres, the mark groombake leaves in the `.obj` header comment and in
+//!   Alembic archive metadata (`groombake_units`).
+//! - Where the file records none: the units the user states
+//!   (`--source-units`, `[groom] units`); else, for Alembic, the writing
+//!   application (`_ai_Application`: Blender and Houdini work in metres, Maya,
+//!   Unreal and anything else in centimetres); else the format's convention,
+//!   centimetres for `.hair`, `.data` and `.obj`.
+//! - A writer writes the units it is asked for (`convert --units`,
+//!   `[[export]] units`); by default glTF in metres (its specification), USD in
+//!   the groom's units (it records them), and `.abc`, `.hair`, `.data`, `.obj`
+//!   in centimetres, the convention their readers assume.
 
 use std::fmt;
 use std::str::FromStr;
+
+/// The Alembic archive metadata key where groombake records the units it
+/// wrote in (Alembic has no unit field of its own).
+pub const ALEMBIC_UNITS_KEY: &str = "groombake_units";
 
 /// A length unit, as metres per unit (USD's `metersPerUnit`).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -134,6 +134,15 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
         }
     };
     groom.provenance.source = Some(path.to_path_buf());
+    if groom.provenance.units_source.is_empty() {
+        // The readers that decide by a rule of their own (.obj, .abc) say so;
+        // USD and glTF record units, the other formats follow their convention.
+        groom.provenance.units_source = match groom.provenance.format.as_str() {
+            "usd" | "gltf" => "file",
+            _ => "format",
+        }
+        .into();
+    }
     Ok(groom)
 }
 

@@ -68,6 +68,11 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         up_axis: UpAxis::Y,
         ..Groom::default()
     };
+    if let Some((units, up)) = groombake_header(bytes) {
+        groom.units = units;
+        groom.up_axis = up;
+        groom.provenance.units_source = "file".into();
+    }
     for strand in &strands {
         groom.strand_vertex_counts.push(strand.len() as u32);
         groom
@@ -76,6 +81,27 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     }
     groom.provenance.format = "obj".into();
     Ok(groom)
+}
+
+/// The units and up axis the `.obj` exporter records in its first line,
+/// `# groombake: N strands, M points, units cm (0.01 m), up Y`; `None` for
+/// any other file (the units rule then takes the format's centimetres).
+fn groombake_header(bytes: &[u8]) -> Option<(Units, UpAxis)> {
+    let line = bytes.split(|&b| b == b'\n').next()?;
+    let line = std::str::from_utf8(line).ok()?.trim_end();
+    let rest = line.strip_prefix("# groombake:")?;
+    let meters = rest.split_once("units ")?.1.split_once('(')?.1;
+    let meters = meters.split_once(" m)")?.0.parse::<f64>().ok()?;
+    if !(meters.is_finite() && meters > 0.0) {
+        return None;
+    }
+    let up = rest.rsplit_once("up ")?.1.parse().ok()?;
+    Some((
+        Units {
+            meters_per_unit: meters,
+        },
+        up,
+    ))
 }
 
 #[cfg(test)]

@@ -11,13 +11,15 @@ pub struct ConvertArgs {
     input: PathBuf,
     /// The file to write; its extension picks the format.
     output: PathBuf,
-    /// Units of the output (m, cm, mm, in, or metres per unit); default: the input's.
+    /// Units of the output (m, cm, mm, in, or metres per unit); default: the
+    /// format's (glTF m; USD the input's; .abc, .hair, .data, .obj cm).
     #[arg(long)]
     units: Option<Units>,
     /// Up axis of the output; default: the input's.
     #[arg(long)]
     up: Option<UpAxis>,
-    /// Units the input is in, for formats that do not say (.hair, .abc, .obj, .data: cm by default).
+    /// Units the input is in, for formats that do not record them (.hair,
+    /// .data, .obj: cm by default; .abc: by the writing application).
     #[arg(long)]
     source_units: Option<Units>,
     /// Up axis the input uses, for formats that do not say (default y).
@@ -26,12 +28,17 @@ pub struct ConvertArgs {
     /// Write only this frame (0-based) of an animated input, as a static groom.
     #[arg(long)]
     frame: Option<usize>,
+    /// Fail (exit 2) instead of warning when the output must change anything
+    /// about the data.
+    #[arg(long)]
+    strict: bool,
 }
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     let mut groom = super::read_groom(&args.input)?;
     if let Some(units) = args.source_units {
         groom.units = units;
+        groom.provenance.units_source = "stated".into();
     }
     if let Some(up) = args.source_up {
         groom.up_axis = up;
@@ -45,9 +52,15 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
             ))
         })?;
     }
-    let units = args.units.unwrap_or(groom.units);
+    let units = args
+        .units
+        .unwrap_or_else(|| exporters::default_units(&args.output, groom.units));
     let up = args.up.unwrap_or(groom.up_axis);
     groom.convert_to(units, up);
+    let warnings: Vec<String> = exporters::units_warning(&args.output, units)
+        .into_iter()
+        .collect();
+    super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write(&args.output, &groom)?;
     Ok(())
 }

@@ -46,6 +46,7 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
         "bounds": { "min": min, "max": max },
         "units": groom.units.name(),
         "meters_per_unit": groom.units.meters_per_unit,
+        "units_source": groom.provenance.units_source,
         "up_axis": groom.up_axis.name(),
         "basis": groom.basis.name(),
         "frames": groom.frames.len(),
@@ -53,6 +54,21 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
         "attributes": attributes,
         "first_point": groom.points.first(),
     })
+}
+
+/// Which rule of the units rule (README, "Units") gave the units, in words.
+fn units_rule(source: &str) -> String {
+    match source {
+        "file" => "recorded in the file".into(),
+        "format" => "the format's convention (it records no units; --source-units overrides)".into(),
+        "stated" => "as stated".into(),
+        other => match other.strip_prefix("application ") {
+            Some(application) => format!(
+                "from the writing application '{application}' (Alembic records no units; --source-units overrides)"
+            ),
+            None => other.into(),
+        },
+    }
 }
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
@@ -71,7 +87,13 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     if let Some((min, max)) = groom.bounds() {
         writeln!(out, "bounds      {min:?} .. {max:?}")?;
     }
-    writeln!(out, "units       {} (up {})", groom.units, groom.up_axis)?;
+    writeln!(
+        out,
+        "units       {} (up {}), {}",
+        groom.units,
+        groom.up_axis,
+        units_rule(&groom.provenance.units_source)
+    )?;
     writeln!(out, "basis       {}", groom.basis.name())?;
     writeln!(out, "frames      {}", groom.frames.len())?;
     if let (Some(first), Some(last)) = (groom.frames.first(), groom.frames.last()) {

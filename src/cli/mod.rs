@@ -94,6 +94,20 @@ pub fn is_broken_pipe(error: &anyhow::Error) -> bool {
     })
 }
 
+/// Prints each warning on stderr, one line each; with `strict`, refuses
+/// (exit 2) instead, before anything is written.
+pub fn warn_or_refuse(warnings: &[String], strict: bool) -> anyhow::Result<()> {
+    if strict {
+        if let Some(first) = warnings.first() {
+            return Err(BadInput(format!("--strict: {first}")).into());
+        }
+    }
+    for warning in warnings {
+        eprintln!("groombake: warning: {warning}");
+    }
+    Ok(())
+}
+
 /// Reads a groom file and refuses one with fatal problems, naming the first.
 pub fn read_groom(path: &std::path::Path) -> anyhow::Result<groom::Groom> {
     let groom = importers::read(path)?;

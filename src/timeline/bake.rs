@@ -124,6 +124,7 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
                         .get_ref()
                         .parse()
                         .map_err(|m: String| timeline.error_at(units.span(), m))?;
+                    groom.provenance.units_source = "stated".into();
                 }
                 if let Some(up) = &spec.up {
                     groom.up_axis = up
@@ -251,7 +252,7 @@ fn export_units(timeline: &Timeline, index: usize) -> (Units, UpAxis) {
         .units
         .as_ref()
         .and_then(|u| u.get_ref().parse().ok())
-        .unwrap_or(Units::METERS);
+        .unwrap_or_else(|| exporters::default_units(Path::new(e.path.get_ref()), Units::METERS));
     let up =
         e.up.as_ref()
             .and_then(|u| u.get_ref().parse().ok())
@@ -670,6 +671,10 @@ fn bake_in_pool(
             create_parent(&path)?;
             exporters::write(&path, &out)?;
         }
+        let (units, _) = export_units(timeline, index);
+        report
+            .warnings
+            .extend(exporters::units_warning(&path, units));
         let what = format!("{:?}", e.what).to_lowercase();
         report
             .outputs

@@ -449,7 +449,7 @@ pub struct ExportSpec {
     pub what: ExportWhat,
     /// Frames per second of an animated export.
     pub fps: Option<Spanned<f64>>,
-    /// Units of the file (default: metres, or the format's convention).
+    /// Units of the file (default: the format's, `exporters::default_units`).
     pub units: Option<Spanned<String>>,
     /// Up axis of the file (default y).
     pub up: Option<Spanned<String>>,

@@ -6,10 +6,51 @@
 use crate::util::{hand_to_validators, shared_data, TestDir};
 use groom::Frame;
 use serde_json::json;
+use std::path::Path;
 
 const BANGS_HAIR: &str = "hairutil_Bangs_100.hair";
 const BANGS_ABC: &str = "hairutil_Bangs_100.abc";
 const BLENDER_ABC: &str = "blender501_hair_static.abc";
+
+/// An archive Blender wrote (`_ai_Application=Blender`) is in metres: the
+/// units rule takes the application's units where no `--source-units` is
+/// given, and `inspect --json` says so. Blender's Poly curve starts at
+/// (1, 0, 0) and the hair reaches 0.4 up (alembic3d reads the same numbers).
+#[test]
+fn blender_archive_reads_as_metres() {
+    let dir = TestDir::new();
+    let source = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(BLENDER_ABC);
+    let source = source.to_str().unwrap();
+    let summary = dir.inspect(source);
+    assert_eq!(summary["units"], "m", "{summary}");
+    assert_eq!(summary["units_source"], "application Blender", "{summary}");
+    assert_eq!(summary["bounds"]["max"], json!([1.1f32, 0.4f32, 0.0]));
+    // Converted with the defaults, it becomes centimetres (Alembic's default).
+    dir.run_ok(&["convert", source, "cm.abc"]);
+    let cm = importers::read(&dir.path("cm.abc")).unwrap();
+    assert_eq!(cm.units, groom::Units::CENTIMETERS);
+    let (_, max) = cm.bounds().unwrap();
+    assert!(
+        (max[0] - 110.0).abs() < 1e-4 && (max[1] - 40.0).abs() < 1e-4,
+        "{max:?}"
+    );
+    // Stated units win over the application's.
+    dir.run_ok(&["convert", source, "stated.abc", "--source-units", "cm"]);
+    let (_, max) = importers::read(&dir.path("stated.abc"))
+        .unwrap()
+        .bounds()
+        .unwrap();
+    assert!((max[0] - 1.1).abs() < 1e-6, "{max:?}");
+    // --units m writes metres and marks them.
+    dir.run_ok(&["convert", source, "m.abc", "--units", "m"]);
+    let summary = dir.inspect("m.abc");
+    assert_eq!(
+        (&summary["units"], &summary["units_source"]),
+        (&json!("m"), &json!("file"))
+    );
+}
 
 #[test]
 fn bangs_hair_to_abc_reads_as_100_curves_1165_points() {

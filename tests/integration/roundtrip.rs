@@ -12,10 +12,14 @@ use std::path::Path;
 
 const FORMATS: [&str; 8] = ["hair", "data", "obj", "glb", "gltf", "usda", "usdc", "abc"];
 
-/// Formats whose files say nothing about units: the reader takes them as
-/// centimetres, so a test states the writer's units as `convert
-/// --source-units` would.
-const UNITLESS: [&str; 3] = ["hair", "data", "obj"];
+/// Formats that cannot record units: a file of them written in anything but
+/// the centimetres their reader assumes reads back only with `--source-units`
+/// (the writer warns). Every other format reads back in the units written.
+const UNRECORDED: [&str; 2] = ["hair", "data"];
+
+/// The units a test writes files in: `None` for each format's default (no
+/// `--units`), as `convert` and the bake choose them.
+const EXPORT_UNITS: [Option<Units>; 3] = [Some(Units::CENTIMETERS), Some(Units::METERS), None];
 
 /// The formats that hold each attribute of the test groom.
 fn holds(format: &str, attribute: &str) -> bool {
@@ -74,14 +78,45 @@ fn test_groom() -> Groom {
     groom
 }
 
-/// Reads a file of format `ext` that was written from a groom in `written_in`
-/// units, and brings it to the test groom's centimetres, Y up.
-fn read_back(path: &Path, ext: &str, written_in: Units) -> Groom {
+/// Writes `groom` as `convert` would: in `units`, else the format's default.
+/// Returns the units the file holds.
+fn write_as_convert(path: &Path, groom: &Groom, units: Option<Units>) -> Units {
+    let units = units.unwrap_or_else(|| exporters::default_units(path, groom.units));
+    let mut out = groom.clone();
+    out.convert_to(units, out.up_axis);
+    exporters::write(path, &out).unwrap_or_else(|e| panic!("writing {}: {e}", path.display()));
+    exporters::file_units(path, units)
+}
+
+/// Reads a file of format `ext` written in `written_in` units by the units
+/// rule, stating the units only where the format cannot record them and
+/// they are not its convention (what the writer's warning asks for).
+fn read_by_rule(path: &Path, ext: &str, written_in: Units) -> Groom {
     let mut groom =
         importers::read(path).unwrap_or_else(|e| panic!("reading {}: {e}", path.display()));
-    if UNITLESS.contains(&ext) {
+    if UNRECORDED.contains(&ext) {
+        assert_eq!(
+            exporters::units_warning(path, written_in).is_some(),
+            written_in != Units::CENTIMETERS,
+            "{}: the writer warns exactly when the units do not read back",
+            path.display()
+        );
         groom.units = written_in;
+    } else {
+        assert_eq!(
+            groom.units,
+            written_in,
+            "{}: read back in other units ({})",
+            path.display(),
+            groom.provenance.units_source
+        );
     }
+    groom
+}
+
+/// In the test groom's centimetres, Y up.
+fn normalised(groom: &Groom) -> Groom {
+    let mut groom = groom.clone();
     groom.convert_to(Units::CENTIMETERS, UpAxis::Y);
     groom
 }
@@ -176,52 +211,119 @@ fn expectation(
 }
 
 #[test]
-fn every_format_pair_round_trips_points_and_attributes() {
+fn every_format_pair_round_trips_points_and_attributes_at_m_and_cm() {
     let dir = TestDir::new();
     let original = test_groom();
     assert!(original.validate().iter().all(|p| !p.is_fatal()));
-    for a in FORMATS {
-        let first = dir.path(&format!("first.{a}"));
-        exporters::write(&first, &original)
-            .unwrap_or_else(|e| panic!("writing {}: {e}", first.display()));
-        // As read, in the file's own units: what the next writer gets.
-        let mut through_a = importers::read(&first).unwrap();
-        if UNITLESS.contains(&a) {
-            through_a.units = original.units;
-        }
-        let kept: Vec<&str> = ["width", "root_uv"]
-            .into_iter()
-            .filter(|name| holds(a, name))
-            .collect();
-        let mut normalised = through_a.clone();
-        normalised.convert_to(Units::CENTIMETERS, UpAxis::Y);
-        check(&original, &normalised, &kept, a);
-
-        for b in FORMATS.into_iter().filter(|&b| b != a) {
-            let context = format!("{a} -> {b}");
-            let second = dir.path(&format!("{a}_to_{b}.{b}"));
-            exporters::write(&second, &through_a)
-                .unwrap_or_else(|e| panic!("{context}: writing: {e}"));
-            let back = read_back(&second, b, through_a.units);
-            let both: Vec<&str> = kept.iter().copied().filter(|n| holds(b, n)).collect();
-            check(&original, &back, &both, &context);
-            // A few of the second-generation files, for the external validators.
-            let handed = matches!(
-                (a, b),
-                ("gltf", "abc")
-                    | ("abc", "usda")
-                    | ("usdc", "glb")
-                    | ("hair", "usdc")
-                    | ("usda", "gltf")
+    for export_units in EXPORT_UNITS {
+        let units_label = export_units.map_or("default".to_string(), |u| u.name());
+        for a in FORMATS {
+            let first = dir.path(&format!("first_{units_label}.{a}"));
+            let written = write_as_convert(&first, &original, export_units);
+            // As read, in the file's own units: what the next writer gets.
+            let through_a = read_by_rule(&first, a, written);
+            let kept: Vec<&str> = ["width", "root_uv"]
+                .into_iter()
+                .filter(|name| holds(a, name))
+                .collect();
+            check(
+                &original,
+                &normalised(&through_a),
+                &kept,
+                &format!("{a} in {units_label}"),
             );
-            if handed {
-                let has = |n: &str| both.contains(&n);
-                if let Some(expect) =
-                    expectation(b, &original, through_a.units, has("width"), has("root_uv"))
-                {
-                    hand_to_validators(&second, &format!("roundtrip_{a}_to_{b}"), expect);
+
+            for b in FORMATS.into_iter().filter(|&b| b != a) {
+                let context = format!("{a} -> {b} in {units_label}");
+                let second = dir.path(&format!("{a}_to_{b}_{units_label}.{b}"));
+                let written = write_as_convert(&second, &through_a, export_units);
+                let back = read_by_rule(&second, b, written);
+                let both: Vec<&str> = kept.iter().copied().filter(|n| holds(b, n)).collect();
+                check(&original, &normalised(&back), &both, &context);
+                // A few of the second-generation files, for the external validators.
+                let handed = matches!(
+                    (a, b),
+                    ("gltf", "abc")
+                        | ("abc", "usda")
+                        | ("usdc", "glb")
+                        | ("hair", "usdc")
+                        | ("usda", "gltf")
+                );
+                if handed && export_units.is_none() {
+                    let has = |n: &str| both.contains(&n);
+                    if let Some(expect) =
+                        expectation(b, &original, written, has("width"), has("root_uv"))
+                    {
+                        hand_to_validators(&second, &format!("roundtrip_{a}_to_{b}"), expect);
+                    }
                 }
             }
         }
     }
+}
+
+/// The Alembic units acceptance: the same groom written with `units = "m"`
+/// and `"cm"` holds points that differ by exactly 100x (checked again by
+/// alembic3d in CI), and each reads back in the units it was written in.
+#[test]
+fn alembic_in_metres_and_centimetres_differs_by_100x() {
+    let dir = TestDir::new();
+    let original = test_groom();
+    let mut files = Vec::new();
+    for units in [Units::METERS, Units::CENTIMETERS] {
+        let path = dir.path(&format!("units_{}.abc", units.name()));
+        write_as_convert(&path, &original, Some(units));
+        let back = importers::read(&path).unwrap();
+        assert_eq!(back.units, units);
+        assert_eq!(back.provenance.units_source, "file");
+        let mut expect = expectation("abc", &original, units, true, true).unwrap();
+        if units == Units::METERS {
+            expect["scaled"] = json!({"of": "units_cm.abc", "by": 0.01});
+        }
+        hand_to_validators(&path, &format!("units_{}", units.name()), expect);
+        files.push(back);
+    }
+    let (metres, centimetres) = (&files[0], &files[1]);
+    for (m, cm) in metres.points.iter().zip(&centimetres.points) {
+        for k in 0..3 {
+            let ratio = cm[k] / m[k];
+            assert!(
+                (ratio - 100.0).abs() <= 100.0 * 4.0 * f32::EPSILON,
+                "cm {} / m {} = {ratio}",
+                cm[k],
+                m[k]
+            );
+        }
+    }
+}
+
+/// `.hair` cannot record metres: `convert --units m` warns on stderr with
+/// the flag that reads it back; `--strict` refuses (exit 2) and writes nothing.
+#[test]
+fn unrecordable_units_warn_and_strict_refuses() {
+    let dir = TestDir::new();
+    exporters::write(&dir.path("in.usda"), &test_groom()).unwrap();
+    let output = dir.run_ok(&["convert", "in.usda", "m.hair", "--units", "m"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("warning:") && stderr.contains("--source-units m"),
+        "{stderr}"
+    );
+    let message = dir.run_fail(
+        &[
+            "convert",
+            "in.usda",
+            "strict.hair",
+            "--units",
+            "m",
+            "--strict",
+        ],
+        2,
+    );
+    assert!(message.contains("--strict"), "{message}");
+    assert!(!dir.path("strict.hair").exists());
+    // The default (centimetres) needs no warning.
+    let output = dir.run_ok(&["convert", "in.usda", "cm.hair"]);
+    assert!(output.stderr.is_empty());
 }

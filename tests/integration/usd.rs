@@ -324,3 +324,122 @@ fn usd_core_file_converts_to_valid_usd() {
         );
     }
 }
+
+/// The hand-written composition fixtures of `tests/data/usd/`, with the
+/// strand and vertex counts usd-core composes for them (instance proxies
+/// included). What groombake reads of each (counts and world points) goes to
+/// `.ci/check_usd_fixtures.py`, which compares it with usd-core's reading.
+const COMPOSED_FIXTURES: [(&str, &[u32]); 9] = [
+    ("reference_internal.usda", &[3, 2, 3, 2]),
+    ("payload_main.usda", &[4, 3, 4, 3]),
+    ("sublayer_main.usda", &[2, 2]),
+    ("instancing.usda", &[3, 3, 3]),
+    ("inherits.usda", &[2, 3, 2]),
+    ("mixed_types.usda", &[3, 4, 4]),
+    ("pinned_wrap.usda", &[4, 5]),
+    ("constant_widths.usda", &[3, 2]),
+    ("color3f.usda", &[2, 3]),
+];
+
+fn usd_fixture(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/usd")
+        .join(name)
+}
+
+#[test]
+fn composed_fixtures_read_as_usd_core_composes_them() {
+    for (name, counts) in COMPOSED_FIXTURES {
+        let path = usd_fixture(name);
+        let groom = importers::read(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(groom.strand_vertex_counts, counts, "{name}");
+        let Some(dir) = std::env::var_os("GROOMBAKE_ARTIFACTS") else {
+            continue;
+        };
+        let dir = std::path::PathBuf::from(dir).join("usd_fixtures");
+        std::fs::create_dir_all(&dir).unwrap();
+        let reading = json!({
+            "source": path.canonicalize().unwrap(),
+            "counts": groom.strand_vertex_counts,
+            "points": groom.points,
+        });
+        std::fs::write(
+            dir.join(format!("{name}.groombake.json")),
+            serde_json::to_vec(&reading).unwrap(),
+        )
+        .unwrap();
+    }
+}
+
+/// Where a reference's layer cannot be opened, the error names the arc and
+/// the missing file, exit 2.
+#[test]
+fn unresolvable_payload_names_the_arc_and_the_file() {
+    let dir = TestDir::new();
+    let source = usd_fixture("missing_payload.usda");
+    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    assert!(
+        message.contains("missing_payload.usda:7:")
+            && message.contains("payload @./not_here.usda@</Hair>")
+            && message.contains("not_here.usda: No such file"),
+        "{message}"
+    );
+}
+
+/// A reference cycle ends with an error, not a hang or a stack overflow.
+#[test]
+fn reference_cycle_is_an_error() {
+    let dir = TestDir::new();
+    std::fs::write(
+        dir.path("a.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"A\"\n)\ndef \"A\" (\n    references = @./b.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path("b.usda"),
+        "#usda 1.0\n(\n    defaultPrim = \"B\"\n)\ndef \"B\" (\n    references = @./a.usda@\n)\n{\n}\n",
+    )
+    .unwrap();
+    let message = dir.run_fail(&["inspect", "a.usda"], 2);
+    assert!(message.contains("a cycle?"), "{message}");
+}
+
+/// Every fixture converts to `.usda` and `.usdc` that usd-core's validators
+/// pass, keeping the counts, the wrap (pinned stays pinned) and each
+/// primvar's declared type (`color3f[]`, `texCoord2f[]`).
+#[test]
+fn fixtures_convert_keeping_wrap_and_declared_types() {
+    let dir = TestDir::new();
+    for (name, counts) in COMPOSED_FIXTURES {
+        let source = usd_fixture(name);
+        let stem = name.trim_end_matches(".usda");
+        for ext in ["usda", "usdc"] {
+            let out = format!("{stem}.{ext}");
+            dir.run_ok(&["convert", source.to_str().unwrap(), &out]);
+            let back = importers::read(&dir.path(&out)).unwrap();
+            assert_eq!(back.strand_vertex_counts, counts, "{out}");
+            let points: u32 = counts.iter().sum();
+            hand_to_validators(
+                &dir.path(&out),
+                &format!("usd_fixture_{stem}_{ext}"),
+                json!({"curves": counts.len(), "points": points}),
+            );
+        }
+    }
+    let text = std::fs::read_to_string(dir.path("pinned_wrap.usda")).unwrap();
+    assert!(text.contains("uniform token wrap = \"pinned\""), "{text}");
+    let text = std::fs::read_to_string(dir.path("color3f.usda")).unwrap();
+    assert!(
+        text.contains("color3f[] primvars:displayColor")
+            && text.contains("texCoord2f[] primvars:st"),
+        "{text}"
+    );
+    let back = importers::read(&dir.path("color3f.usdc")).unwrap();
+    assert_eq!(
+        back.provenance
+            .metadata
+            .get("usd.type.displayColor")
+            .map(String::as_str),
+        Some("color3f[]")
+    );
+}

@@ -86,8 +86,10 @@ struct CurvesExport {
     positions: PropertyWriter,
     bounds: PropertyWriter,
     vertex_count: usize,
-    /// Scale and axis change from the groom's units to Unreal's.
-    source_units: Units,
+    /// The groom's units, which the file is written in (recorded in the
+    /// archive metadata unless they are the centimetres readers assume).
+    units: Units,
+    /// The groom's up axis; Alembic is written Y up.
     source_up: UpAxis,
     fps: Option<f64>,
     times: Vec<f64>,
@@ -182,12 +184,12 @@ impl CurvesExport {
             Some(fps) => archive.add_time_sampling(TimeSampling::uniform(fps, 0.0)),
             None => 0,
         };
-        let mut cm = groom.clone();
-        cm.frames.clear();
-        cm.convert_to(Units::CENTIMETERS, UpAxis::Y);
-        let fixed =
-            Self::fixed_properties(&mut archive, &cm, animated_sampling).map_err(io_error(path))?;
-        let arbitrary = Self::arbitrary_properties(&mut archive, &cm, animated_sampling)
+        let mut y_up = groom.clone();
+        y_up.frames.clear();
+        y_up.convert_to(groom.units, UpAxis::Y);
+        let fixed = Self::fixed_properties(&mut archive, &y_up, animated_sampling)
+            .map_err(io_error(path))?;
+        let arbitrary = Self::arbitrary_properties(&mut archive, &y_up, animated_sampling)
             .map_err(io_error(path))?;
         Ok(CurvesExport {
             path: path.to_path_buf(),
@@ -212,7 +214,7 @@ impl CurvesExport {
                 animated_sampling,
             ),
             vertex_count: groom.points.len(),
-            source_units: groom.units,
+            units: groom.units,
             source_up: groom.up_axis,
             fps,
             times: Vec::new(),
@@ -352,13 +354,9 @@ impl CurvesExport {
         Ok(open)
     }
 
-    /// Points of the groom's units and axis in centimetres, Y up.
+    /// Points of the groom's axis, Y up.
     fn converted(&self, points: &[[f32; 3]]) -> Vec<[f32; 3]> {
-        let scale = (self.source_units.meters_per_unit / Units::CENTIMETERS.meters_per_unit) as f32;
-        points
-            .iter()
-            .map(|&p| self.source_up.to_y_up(p).map(|c| c * scale))
-            .collect()
+        points.iter().map(|&p| self.source_up.to_y_up(p)).collect()
     }
 
     fn add_sample(&mut self, points: &[[f32; 3]]) -> Result<(), ExportError> {
@@ -467,11 +465,18 @@ impl CurvesExport {
             super::archive::LIBRARY_VERSION % 100
         );
         let fps_text = format!("{}", self.fps.unwrap_or(24.0));
-        let archive_metadata = metadata(&[
-            ("_ai_AlembicVersion", &alembic_version),
-            ("_ai_Application", &application),
-            ("_ai_DCC_FPS", &fps_text),
-        ]);
+        let units_name = self.units.name();
+        let mut archive_fields = vec![
+            ("_ai_AlembicVersion", alembic_version.as_str()),
+            ("_ai_Application", application.as_str()),
+            ("_ai_DCC_FPS", fps_text.as_str()),
+        ];
+        // Alembic has no unit field; readers assume centimetres, so only
+        // other units need groombake's mark.
+        if self.units != Units::CENTIMETERS {
+            archive_fields.push((groom::ALEMBIC_UNITS_KEY, units_name.as_str()));
+        }
+        let archive_metadata = metadata(&archive_fields);
         let file = self
             .archive
             .finish(&archive_metadata, vec![groom])

@@ -138,7 +138,7 @@ impl CurvesScene {
 
         let mut properties = vec![
             token_property("type", curve_type),
-            token_property("wrap", "nonperiodic"),
+            token_property("wrap", wrap_of(groom)),
             Property {
                 name: "curveVertexCounts".into(),
                 type_name: "int[]",
@@ -177,19 +177,22 @@ impl CurvesScene {
                     "texCoord2f[]",
                     PropertyValue::Float2s(v.clone()),
                 ),
-                (name, values) => {
-                    let name = format!("primvars:{}", identifier(name));
+                (attribute_name, values) => {
+                    let name = format!("primvars:{}", identifier(attribute_name));
+                    let type_name = declared_type(groom, attribute_name, values);
                     match values {
                         AttributeValues::Float(v) => {
-                            (name, "float[]", PropertyValue::Floats(v.clone()))
+                            (name, type_name, PropertyValue::Floats(v.clone()))
                         }
                         AttributeValues::Vec2(v) => {
-                            (name, "float2[]", PropertyValue::Float2s(v.clone()))
+                            (name, type_name, PropertyValue::Float2s(v.clone()))
                         }
                         AttributeValues::Vec3(v) => {
-                            (name, "float3[]", PropertyValue::Float3s(v.clone()))
+                            (name, type_name, PropertyValue::Float3s(v.clone()))
                         }
-                        AttributeValues::Int(v) => (name, "int[]", PropertyValue::Ints(v.clone())),
+                        AttributeValues::Int(v) => {
+                            (name, type_name, PropertyValue::Ints(v.clone()))
+                        }
                     }
                 }
             };
@@ -274,6 +277,65 @@ pub(crate) fn time_code(time: f64, fps: f64) -> f64 {
         whole
     } else {
         code
+    }
+}
+
+/// The `wrap` the groom was read with (`usd.wrap` in its provenance), where
+/// USD can write it for every strand; else `nonperiodic`.
+fn wrap_of(groom: &Groom) -> &'static str {
+    match groom
+        .provenance
+        .metadata
+        .get("usd.wrap")
+        .map(String::as_str)
+    {
+        Some("pinned") => "pinned",
+        Some("periodic") => "periodic",
+        _ => "nonperiodic",
+    }
+}
+
+/// The USD type of a primvar: the one it was read with (`usd.type.<name>`
+/// in the provenance) when it still fits the values, else the schema's type
+/// for the names schemas define (`displayColor` is `color3f[]`), else the
+/// plain type of the values.
+fn declared_type(groom: &Groom, name: &str, values: &AttributeValues) -> &'static str {
+    const ROLES: [&str; 11] = [
+        "float[]",
+        "int[]",
+        "float2[]",
+        "texCoord2f[]",
+        "float3[]",
+        "color3f[]",
+        "normal3f[]",
+        "vector3f[]",
+        "point3f[]",
+        "texCoord3f[]",
+        "double[]",
+    ];
+    let plain = match values {
+        AttributeValues::Float(_) => "float[]",
+        AttributeValues::Vec2(_) => "float2[]",
+        AttributeValues::Vec3(_) => "float3[]",
+        AttributeValues::Int(_) => "int[]",
+    };
+    let fits = |type_name: &str| match values {
+        AttributeValues::Float(_) => type_name == "float[]",
+        AttributeValues::Vec2(_) => type_name.ends_with("2f[]"),
+        AttributeValues::Vec3(_) => type_name.ends_with("3f[]"),
+        AttributeValues::Int(_) => type_name == "int[]",
+    };
+    let recorded = groom
+        .provenance
+        .metadata
+        .get(&format!("usd.type.{name}"))
+        .and_then(|t| ROLES.iter().find(|&&r| r == t && fits(r)));
+    if let Some(&type_name) = recorded {
+        return type_name;
+    }
+    match (name, values) {
+        ("displayColor", AttributeValues::Vec3(_)) => "color3f[]",
+        _ => plain,
     }
 }
 

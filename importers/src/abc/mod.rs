@@ -355,7 +355,7 @@ mod tests {
     }
 
     #[test]
-    fn export_converts_to_centimetres_y_up() {
+    fn export_keeps_its_units_and_marks_them_y_up() {
         let dir = TempDir::new("units");
         let mut groom = sample_groom();
         groom.units = Units::METERS;
@@ -363,10 +363,28 @@ mod tests {
         let path = dir.0.join("m.abc");
         exporters::write(&path, &groom).unwrap();
         let back = read(&path).unwrap();
+        assert_eq!(back.units, Units::METERS);
+        assert_eq!(back.provenance.units_source, "file");
         let mut expected = groom.clone();
-        expected.convert_to(Units::CENTIMETERS, UpAxis::Y);
+        expected.convert_to(Units::METERS, UpAxis::Y);
         assert_eq!(back.points, expected.points);
         assert_eq!(back.attribute("width"), expected.attribute("width"));
+    }
+
+    #[test]
+    fn application_decides_units_where_no_mark() {
+        use archive::Metadata;
+        let units = |text: &str| scene::archive_units(&Metadata(text.into()));
+        let blender = units("_ai_Application=Blender;blender_version=v5.0.10");
+        assert_eq!(blender, (Units::METERS, "application Blender".into()));
+        assert_eq!(units("_ai_Application=Houdini 20.5").0, Units::METERS);
+        assert_eq!(units("_ai_Application=Maya 2025").0, Units::CENTIMETERS);
+        assert_eq!(units("_ai_Application=Unreal Engine").0, Units::CENTIMETERS);
+        assert_eq!(units("_ai_Application=Something").0, Units::CENTIMETERS);
+        assert_eq!(units("").0, Units::CENTIMETERS);
+        assert_eq!(units("").1, "format");
+        let marked = units("_ai_Application=Blender;groombake_units=cm");
+        assert_eq!(marked, (Units::CENTIMETERS, "file".into()));
     }
 
     #[test]

@@ -5,7 +5,7 @@
 use super::archive::{Archive, Kind, Object, Pod, Property};
 use super::ogawa::Fault;
 use crate::transform::{multiply, scaling, transform_point, translation, Matrix, IDENTITY};
-use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope};
+use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope, Units};
 
 /// Imath's `setAxisAngle`, transposed for column vectors; `degrees` as
 /// Alembic stores them.
@@ -152,6 +152,9 @@ pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
     reader.walk(&archive.top, &IDENTITY, &mut parts)?;
     let mut groom = merge(parts, &mut reader.budget)?;
     groom.provenance.format = "abc".into();
+    let (units, units_source) = archive_units(&archive.metadata);
+    groom.units = units;
+    groom.provenance.units_source = units_source;
     let mut info = archive
         .metadata
         .get("_ai_Application")
@@ -165,6 +168,43 @@ pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
     }
     groom.provenance.info = info;
     Ok(groom)
+}
+
+/// The units of an archive by the units rule: groombake's own mark, else the
+/// writing application's working units (Alembic has no unit field), else
+/// centimetres. Returns the units and the rule that gave them.
+pub fn archive_units(metadata: &super::archive::Metadata) -> (Units, String) {
+    if let Some(units) = metadata
+        .get(groom::ALEMBIC_UNITS_KEY)
+        .and_then(|u| u.parse().ok())
+    {
+        return (units, "file".into());
+    }
+    match metadata.get("_ai_Application") {
+        // groombake marks any units but centimetres.
+        Some(application) if application.starts_with("groombake") => {
+            (Units::CENTIMETERS, "file".into())
+        }
+        Some(application) => {
+            let units = application_units(application).unwrap_or(Units::CENTIMETERS);
+            (units, format!("application {application}"))
+        }
+        None => (Units::CENTIMETERS, "format".into()),
+    }
+}
+
+/// The units an application writes Alembic in: Blender and Houdini in
+/// metres, Maya and Unreal in centimetres; `None` for others (taken as
+/// centimetres, the groom tools' convention).
+pub fn application_units(application: &str) -> Option<Units> {
+    let name = application.to_ascii_lowercase();
+    if name.contains("blender") || name.contains("houdini") {
+        Some(Units::METERS)
+    } else if name.contains("maya") || name.contains("unreal") {
+        Some(Units::CENTIMETERS)
+    } else {
+        None
+    }
 }
 
 fn schema(object: &Object) -> &str {

@@ -877,6 +877,9 @@ impl<'a> CrateReader<'a> {
                             "upAxis" => {
                                 stage.up_axis = value()?.text().and_then(|t| t.first().cloned())
                             }
+                            "subLayers" => stage
+                                .unfollowed
+                                .push(("subLayers".into(), Place::Path("/".into()))),
                             _ => {}
                         }
                     }
@@ -900,6 +903,7 @@ impl<'a> CrateReader<'a> {
                 specifier: Specifier::Over,
                 in_variant: entry.text.contains('{'),
                 attributes: Vec::new(),
+                arcs: Vec::new(),
                 place: Place::Path(entry.text.clone()),
             };
             for (name, rep) in fields {
@@ -919,6 +923,11 @@ impl<'a> CrateReader<'a> {
                         {
                             prim.type_name = t.clone();
                         }
+                    }
+                    arc @ ("references" | "payload" | "inherits" | "specializes") => {
+                        stage
+                            .unfollowed
+                            .push((arc.to_string(), Place::Path(entry.text.clone())));
                     }
                     _ => {}
                 }

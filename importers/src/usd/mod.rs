@@ -4,9 +4,10 @@
 //! depth-first order with their typed attributes); [`to_groom`] then turns
 //! every defined `BasisCurves` prim into strands, with each prim's transform
 //! (its `xformOpOrder`, composed through its parents) applied to the points.
-//! Composition arcs (references, payloads, variants, sublayers) are not
-//! followed: only what the file itself defines is read.
+//! [`compose`] first follows sublayers, references, payloads, inherits and
+//! specializes (variants are not selected).
 
+mod compose;
 mod crate_reader;
 mod usda;
 
@@ -24,20 +25,25 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 
 /// Reads USD from bytes already in memory; `path` names them in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
-    let stage = if bytes.starts_with(b"PXR-USDC") {
-        crate_reader::read(path, bytes)?
-    } else if bytes.starts_with(b"#usda ") {
-        usda::read(path, bytes)?
-    } else {
-        return Err(ImportError::malformed(
-            path,
-            Place::Offset(0),
-            "not a USD file: it starts with neither `#usda` (text) nor `PXR-USDC` (crate)",
-        ));
-    };
+    let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     let mut groom = to_groom(path, &stage)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
+}
+
+/// One layer as the file holds it, before composition.
+fn parse_layer(path: &Path, bytes: &[u8]) -> Result<Stage, ImportError> {
+    if bytes.starts_with(b"PXR-USDC") {
+        crate_reader::read(path, bytes)
+    } else if bytes.starts_with(b"#usda ") {
+        usda::read(path, bytes)
+    } else {
+        Err(ImportError::malformed(
+            path,
+            Place::Offset(0),
+            "not a USD file: it starts with neither `#usda` (text) nor `PXR-USDC` (crate)",
+        ))
+    }
 }
 
 /// A value as the readers give it: numbers widened to f64 (f32 values stay
@@ -58,6 +64,55 @@ pub(crate) enum Value {
     Blocked,
     /// A value of a type this importer does not interpret.
     Other,
+    /// The targets of a composition arc list (`references`, `payload`,
+    /// `inherits`, `specializes`, `subLayers`): `@asset@</path>` items.
+    Arcs(Vec<ArcTarget>),
+}
+
+/// One item of a composition arc list: an asset (another layer; `None` for
+/// this one) and a prim path in it (`None` for its `defaultPrim`).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ArcTarget {
+    pub asset: Option<String>,
+    pub prim_path: Option<String>,
+}
+
+/// The kinds of composition arcs a prim can have.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ArcKind {
+    Reference,
+    Payload,
+    Inherit,
+    Specialize,
+}
+
+impl ArcKind {
+    pub(crate) fn of_key(key: &str) -> Option<ArcKind> {
+        Some(match key {
+            "references" => ArcKind::Reference,
+            "payload" => ArcKind::Payload,
+            "inherits" => ArcKind::Inherit,
+            "specializes" => ArcKind::Specialize,
+            _ => return None,
+        })
+    }
+
+    pub(crate) fn key(self) -> &'static str {
+        match self {
+            ArcKind::Reference => "references",
+            ArcKind::Payload => "payload",
+            ArcKind::Inherit => "inherits",
+            ArcKind::Specialize => "specializes",
+        }
+    }
+}
+
+/// A composition arc authored on a prim.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Arc {
+    pub kind: ArcKind,
+    pub targets: Vec<ArcTarget>,
+    pub place: Place,
 }
 
 impl Value {
@@ -123,6 +178,8 @@ pub(crate) struct Prim {
     /// this importer does not select variants.
     pub in_variant: bool,
     pub attributes: Vec<UsdAttribute>,
+    /// Composition arcs, strongest first (`compose` follows them).
+    pub arcs: Vec<Arc>,
     pub place: Place,
 }
 
@@ -140,8 +197,14 @@ pub(crate) struct Stage {
     pub time_codes_per_second: Option<f64>,
     pub frames_per_second: Option<f64>,
     pub prims: Vec<Prim>,
+    /// `defaultPrim`: the prim a reference without a prim path brings.
+    pub default_prim: Option<String>,
+    /// `subLayers`, strongest first, with where they are authored.
+    pub sublayers: Vec<(String, Place)>,
     /// What the reader passed over (variant sets), for the groom's info.
     pub notes: Vec<String>,
+    /// Arcs the reader found but cannot follow (crate files), with where.
+    pub unfollowed: Vec<(String, Place)>,
 }
 
 /// What an element of a USD value type holds.
@@ -361,7 +424,11 @@ struct CurveSet {
     /// `(time code, points)` for each time sample of `points`.
     samples: Vec<(f64, Vec<[f32; 3]>)>,
     basis: CurveBasis,
+    /// `wrap`: nonperiodic, periodic or pinned.
+    wrap: String,
     attributes: Vec<Attribute>,
+    /// The USD type each attribute was declared with (`color3f[]`, ...).
+    declared_types: Vec<(String, String)>,
     notes: Vec<String>,
 }
 
@@ -488,13 +555,11 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         points,
         samples,
         basis,
+        wrap: token("wrap").unwrap_or_else(|| "nonperiodic".into()),
         attributes: Vec::new(),
+        declared_types: Vec::new(),
         notes: Vec::new(),
     };
-    // The groom has no wrap: the control points are kept as they are.
-    if let Some(wrap) = token("wrap").filter(|w| w != "nonperiodic") {
-        set.notes.push(format!("wrap {wrap} read as nonperiodic"));
-    }
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()
@@ -515,7 +580,11 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             .and_then(|a| a.static_value())
             .and_then(|v| v.numbers(1));
         match primvar(file, attribute, &name, indices, &set)? {
-            Ok(converted) => set.attributes.push(converted),
+            Ok(converted) => {
+                set.declared_types
+                    .push((name.clone(), attribute.type_name.clone()));
+                set.attributes.push(converted)
+            }
             Err(note) => set.notes.push(note),
         }
     }
@@ -578,6 +647,13 @@ fn primvar(
             "constant"
         },
     );
+    // One value on a vertex, varying or uniform primvar is read as constant,
+    // as usd-core's renderers do (Blender writes widths so).
+    let interpolation = if elements == 1 && (vertices != 1 || strands != 1) {
+        "constant"
+    } else {
+        interpolation
+    };
     let (scope, expected) = match interpolation {
         "vertex" => (Scope::Vertex, vertices),
         "varying" if elements == vertices => (Scope::Vertex, vertices),
@@ -653,6 +729,23 @@ fn empty_like(values: &AttributeValues, len: usize) -> AttributeValues {
         AttributeValues::Vec2(_) => AttributeValues::Vec2(vec![[0.0; 2]; len]),
         AttributeValues::Vec3(_) => AttributeValues::Vec3(vec![[0.0; 3]; len]),
         AttributeValues::Int(_) => AttributeValues::Int(vec![0; len]),
+    }
+}
+
+/// Per-strand values repeated over each strand's vertices.
+fn per_vertex(values: &AttributeValues, counts: &[u32]) -> AttributeValues {
+    fn spread<T: Copy>(values: &[T], counts: &[u32]) -> Vec<T> {
+        values
+            .iter()
+            .zip(counts)
+            .flat_map(|(&v, &n)| std::iter::repeat_n(v, n as usize))
+            .collect()
+    }
+    match values {
+        AttributeValues::Float(v) => AttributeValues::Float(spread(v, counts)),
+        AttributeValues::Vec2(v) => AttributeValues::Vec2(spread(v, counts)),
+        AttributeValues::Vec3(v) => AttributeValues::Vec3(spread(v, counts)),
+        AttributeValues::Int(v) => AttributeValues::Int(spread(v, counts)),
     }
 }
 
@@ -779,6 +872,30 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         bases.first().copied().unwrap_or_default()
     };
 
+    // The wrap and each attribute's declared type go to the provenance, for
+    // the USD writer to keep them (`usd.wrap`, `usd.type.<attribute>`).
+    let wraps: Vec<&str> = sets.iter().map(|(_, s)| s.wrap.as_str()).collect();
+    if wraps.windows(2).any(|w| w[0] != w[1]) {
+        groom
+            .provenance
+            .metadata
+            .insert("usd.wrap".into(), "mixed".into());
+    } else if let Some(&wrap) = wraps.first().filter(|&&w| w != "nonperiodic") {
+        groom
+            .provenance
+            .metadata
+            .insert("usd.wrap".into(), wrap.into());
+    }
+    for (_, set) in &sets {
+        for (name, type_name) in &set.declared_types {
+            groom
+                .provenance
+                .metadata
+                .entry(format!("usd.type.{name}"))
+                .or_insert_with(|| type_name.clone());
+        }
+    }
+
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
     let mut basis_codes = Vec::new();
@@ -786,6 +903,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     for (group, (path, set)) in sets.into_iter().enumerate() {
         let vertices_before = groom.points.len();
         let strands_before = groom.strand_vertex_counts.len();
+        let earlier_counts = groom.strand_vertex_counts.clone();
         for attribute in set.attributes {
             let before = match attribute.scope {
                 Scope::Vertex => vertices_before,
@@ -804,15 +922,27 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                         ));
                     }
                 }
-                Some(_) => {
-                    return Err(ImportError::malformed(
-                        file,
-                        Place::Path(path.clone()),
-                        format!(
-                            "primvar '{}' has another interpolation than in an earlier curves prim",
-                            attribute.name
-                        ),
-                    ))
+                Some(existing) => {
+                    // Interpolation is per prim: where prims differ, the
+                    // groom holds the attribute per vertex.
+                    if existing.scope == Scope::Strand {
+                        existing.values = per_vertex(&existing.values, &earlier_counts);
+                        existing.scope = Scope::Vertex;
+                    }
+                    let values = match attribute.scope {
+                        Scope::Strand => per_vertex(&attribute.values, &set.counts),
+                        Scope::Vertex => attribute.values.clone(),
+                    };
+                    if !append(&mut existing.values, &values) {
+                        return Err(ImportError::malformed(
+                            file,
+                            Place::Path(path.clone()),
+                            format!(
+                                "primvar '{}' has another type than in an earlier curves prim",
+                                attribute.name
+                            ),
+                        ));
+                    }
                 }
                 None => {
                     let mut values = empty_like(&attribute.values, before);

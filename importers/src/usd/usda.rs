@@ -3,7 +3,9 @@
 //! and metadata. Relationships, connections, dictionaries, list edits and
 //! variant sets are parsed and skipped. Every error names line:column.
 
-use super::{element_kind, ElementKind, Prim, Specifier, Stage, UsdAttribute, Value};
+use super::{
+    element_kind, Arc, ArcKind, ArcTarget, ElementKind, Prim, Specifier, Stage, UsdAttribute, Value,
+};
 use crate::{ImportError, Place};
 use std::path::Path;
 
@@ -360,6 +362,18 @@ impl<'a> Parser<'a> {
                             .ok_or_else(|| bad("a string"))?;
                         self.stage.up_axis = Some(axis);
                     }
+                    "defaultPrim" => {
+                        self.stage.default_prim = value.text().and_then(|t| t.first().cloned());
+                    }
+                    "subLayers" => {
+                        if let Value::Arcs(targets) = value {
+                            for target in targets {
+                                if let Some(asset) = target.asset {
+                                    self.stage.sublayers.push((asset, at.place()));
+                                }
+                            }
+                        }
+                    }
                     _ => {}
                 }
             }
@@ -396,6 +410,7 @@ impl<'a> Parser<'a> {
                 // A bare string is the doc.
                 Token::Text(_) => {}
                 Token::Ident(word) => {
+                    let list_op = word;
                     let key = match word {
                         "prepend" | "append" | "add" | "delete" | "reorder" => {
                             let (key, at) = self.next()?;
@@ -415,8 +430,14 @@ impl<'a> Parser<'a> {
                         key => key,
                     };
                     if self.eat(b'=')? {
-                        let value = self.generic_value(0)?;
-                        entries.push((key.to_string(), value, at));
+                        let arcs = ArcKind::of_key(key).is_some() || key == "subLayers";
+                        if arcs && !matches!(list_op, "delete" | "reorder") {
+                            let value = self.arc_list()?;
+                            entries.push((key.to_string(), value, at));
+                        } else {
+                            let value = self.generic_value(0)?;
+                            entries.push((key.to_string(), value, at));
+                        }
                     }
                 }
                 other => {
@@ -427,6 +448,58 @@ impl<'a> Parser<'a> {
                 }
             }
         }
+    }
+
+    /// A composition arc list: `None`, one item or `[item, ...]`, each item
+    /// `@asset@`, `</prim>` or `@asset@</prim>`, with optional `( ... )`
+    /// (layer offsets, skipped).
+    fn arc_list(&mut self) -> Result<Value, ImportError> {
+        if *self.peek()? == Token::Ident("None") {
+            self.next()?;
+            return Ok(Value::Arcs(Vec::new()));
+        }
+        let list = self.eat(b'[')?;
+        let mut targets = Vec::new();
+        loop {
+            if list && self.eat(b']')? {
+                break;
+            }
+            let mut target = ArcTarget {
+                asset: None,
+                prim_path: None,
+            };
+            if let Token::Asset(asset) = self.peek()? {
+                target.asset = Some(asset.clone());
+                self.next()?;
+            }
+            if let Token::Path(path) = self.peek()? {
+                target.prim_path = Some(path.to_string());
+                self.next()?;
+            }
+            if target.asset.is_none() && target.prim_path.is_none() {
+                let (token, at) = self.next()?;
+                return Err(self.error(
+                    at,
+                    format!(
+                        "expected an arc target (@asset@ or </path>), found {}",
+                        token.describe()
+                    ),
+                ));
+            }
+            if *self.peek()? == Token::Punct(b'(') {
+                let at = self.expect(b'(')?;
+                self.skip_until(b')', at, 0)?;
+            }
+            targets.push(target);
+            if !list {
+                break;
+            }
+            if !self.eat(b',')? {
+                self.expect(b']')?;
+                break;
+            }
+        }
+        Ok(Value::Arcs(targets))
     }
 
     /// Any value, interpreted only as far as a number or a string; lists,
@@ -539,9 +612,26 @@ impl<'a> Parser<'a> {
             Some(parent) => format!("{}/{name}", parent.path),
             None => format!("/{name}"),
         };
+        let mut arcs = Vec::new();
         if *self.peek()? == Token::Punct(b'(') {
-            self.metadata()?;
+            for (key, value, arc_at) in self.metadata()? {
+                if let (Some(kind), Value::Arcs(targets)) = (ArcKind::of_key(&key), value) {
+                    arcs.push(Arc {
+                        kind,
+                        targets,
+                        place: arc_at.place(),
+                    });
+                }
+            }
         }
+        // Strength within a prim: inherits, then references and payloads
+        // (LIVRPS: local, inherits, variants, references, payloads, specializes).
+        arcs.sort_by_key(|arc: &Arc| match arc.kind {
+            ArcKind::Inherit => 0,
+            ArcKind::Reference => 1,
+            ArcKind::Payload => 2,
+            ArcKind::Specialize => 3,
+        });
         self.expect(b'{')?;
         let index = self.stage.prims.len();
         self.stage.prims.push(Prim {
@@ -551,6 +641,7 @@ impl<'a> Parser<'a> {
             specifier,
             in_variant,
             attributes: Vec::new(),
+            arcs,
             place: at.place(),
         });
         self.prim_body(index, in_variant, depth)
