@@ -1,6 +1,6 @@
 //! `groombake preview`: pictures of grooms, contact sheets of frames.
 
-use crate::util::{shared_data, TestDir};
+use crate::util::{test_data, TestDir};
 use groom::{Attribute, AttributeValues, Frame};
 use groombake::generate::{generate, GeneratorParameters, RootLayout, StrandShape};
 use std::path::Path;
@@ -70,7 +70,7 @@ fn animated_swatch(dir: &TestDir) -> String {
 #[test]
 fn shows_the_bangs() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     dir.run_ok(&["preview", bangs.to_str().unwrap(), "-o", "p.png"]);
     let (width, height, pixels) = decode(&dir.path("p.png"));
     assert_eq!((width, height), (1024, 1024));
@@ -91,7 +91,7 @@ fn shows_the_bangs() {
 #[test]
 fn same_input_same_bytes() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     let bangs = bangs.to_str().unwrap();
     for (name, view) in [("a.png", "persp"), ("b.png", "persp"), ("c.png", "top")] {
         dir.run_ok(&[
@@ -144,7 +144,7 @@ fn sheet_of_frames_coloured_by_an_attribute() {
 #[test]
 fn bad_requests_exit_2_with_a_reason() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     let bangs = bangs.to_str().unwrap();
     let stderr = dir.run_fail(
         &["preview", bangs, "-o", "p.png", "--color", "bond_hydrogen"],
