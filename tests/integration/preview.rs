@@ -31,7 +31,7 @@ fn hair_pixels(width: u32, pixels: &[u8]) -> Vec<(u32, u32)> {
 }
 
 /// A small animated groom as a glTF file: a swatch that swings to +X.
-fn animated_swatch(dir: &TestDir) -> String {
+pub(crate) fn animated_swatch(dir: &TestDir) -> String {
     let mut groom = generate(&GeneratorParameters {
         strands: 300,
         layout: RootLayout::Swatch,
