@@ -87,6 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             label,
             groom: &swing,
             frame: Some(frame),
+            surfaces: &[],
         })
         .collect();
     let options = PreviewOptions {

@@ -47,10 +47,9 @@ fn sample_groom() -> Groom {
     groom
 }
 
-fn shared_data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(name)
+/// A file of the workspace's `tests/data/`.
+fn test_data(name: &str) -> PathBuf {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data")).join(name)
 }
 
 fn assert_points_close(a: &Groom, b: &Groom, context: &str) {
@@ -128,7 +127,7 @@ fn attributes_survive_hair_and_gltf() {
 
 #[test]
 fn hair_to_hair_is_byte_identical() {
-    let source = shared_data("hairutil_Bangs_100.hair");
+    let source = test_data("hairutil_Bangs_100.hair");
     let dir = Scratch::new();
     let out = dir.path("copy.hair");
     write(&out, &importers::read(&source).unwrap()).unwrap();
@@ -165,7 +164,7 @@ fn hair_with_every_array_is_byte_identical() {
 
 #[test]
 fn data_to_data_is_byte_identical() {
-    let source = shared_data("hairutil_Bangs_100.data");
+    let source = test_data("hairutil_Bangs_100.data");
     let dir = Scratch::new();
     let out = dir.path("copy.data");
     write(&out, &importers::read(&source).unwrap()).unwrap();

@@ -133,6 +133,9 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
             })
         }
     };
+    if groom.strand_count() == 0 {
+        refuse_mesh(path)?;
+    }
     groom.provenance.source = Some(path.to_path_buf());
     if groom.provenance.units_source.is_empty() {
         // The readers that decide by a rule of their own (.obj, .abc) say so;
@@ -144,6 +147,28 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
         .into();
     }
     Ok(groom)
+}
+
+/// A file with no curves that holds a triangle mesh (a head, a pillow) was
+/// given where hair is expected: an error saying so, rather than an empty
+/// groom that converts and bakes to nothing.
+fn refuse_mesh(path: &Path) -> Result<(), ImportError> {
+    if !matches!(extension_of(path).as_str(), "obj" | "gltf" | "glb") {
+        return Ok(());
+    }
+    // No triangles either (or an unreadable mesh): an empty groom, not a mesh.
+    let Ok((_, triangles)) = mesh::read_triangles(path) else {
+        return Ok(());
+    };
+    Err(ImportError::malformed(
+        path,
+        Place::File,
+        format!(
+            "a triangle mesh ({} triangles) and no curves: hair is read from polylines \
+             (.obj `l`, glTF LINES/LINE_STRIP); a mesh is a collider (`shape = {{ mesh = ... }}`)",
+            triangles.len()
+        ),
+    ))
 }
 
 /// Reads a whole file, naming it in the error.

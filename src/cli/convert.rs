@@ -52,6 +52,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
             ))
         })?;
     }
+    warn_of_dropped_frames(&args, &groom);
     let units = args
         .units
         .unwrap_or_else(|| exporters::default_units(&args.output, groom.units));
@@ -63,4 +64,18 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write(&args.output, &groom)?;
     Ok(())
+}
+
+/// A static format keeps one pose: say so when the input's frames are lost.
+fn warn_of_dropped_frames(args: &ConvertArgs, groom: &groom::Groom) {
+    let frames = groom.frames.len();
+    let static_output =
+        !exporters::ANIMATED_EXTENSIONS.contains(&importers::extension_of(&args.output).as_str());
+    if frames > 0 && static_output {
+        eprintln!(
+            "groombake: warning: {}: holds one pose; the {frames} frames of {} are dropped and its base pose is written (--frame F writes frame F instead)",
+            args.output.display(),
+            args.input.display()
+        );
+    }
 }

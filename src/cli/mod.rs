@@ -6,6 +6,7 @@ mod bench;
 mod convert;
 mod generate;
 mod inspect;
+mod install;
 mod preview;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Draws a groom (or a sheet of its frames) to a PNG picture.
     Preview(preview::PreviewArgs),
+    /// Prints a shell completion script: `groombake completions bash > ...`.
+    Completions(install::CompletionsArgs),
+    /// Prints the man page (roff): `groombake man > groombake.1`.
+    Man,
 }
 
 /// Bad input or usage: exit code 2.
@@ -67,6 +72,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Validate(a) => bake::run_validate(a),
         Command::Bench(a) => bench::run(a),
         Command::Preview(a) => preview::run(a),
+        Command::Completions(a) => install::run_completions(a),
+        Command::Man => install::run_man(),
     }
 }
 

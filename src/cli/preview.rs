@@ -1,5 +1,5 @@
 //! `groombake preview FILE -o OUT.png [--frame F | --frames a,b,c] [--color ATTR]
-//! [--size WxH] [--view front|side|top|persp]`.
+//! [--size WxH] [--view front|side|top|persp] [--rest]`.
 
 use super::BadInput;
 use clap::Args;
@@ -25,9 +25,15 @@ pub struct PreviewArgs {
     /// Picture size in pixels, WIDTHxHEIGHT (each 1 to 16384).
     #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
     size: (u32, u32),
-    /// Where the camera looks from (Y up): front, side, top or persp.
-    #[arg(long, default_value = "front")]
-    view: View,
+    /// Where the camera looks from (Y up): front, side, top or persp. Default:
+    /// a timeline's `[preview] view`, else the axis view that shows most of
+    /// the change (a timeline, an animated file) or of the groom (a still one).
+    #[arg(long)]
+    view: Option<View>,
+    /// Draw the plastic rest shape: of a `state` export, or of a timeline's
+    /// result (what the hair would look like with nothing holding it).
+    #[arg(long, conflicts_with_all = ["frame", "frames"])]
+    rest: bool,
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -60,11 +66,22 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     if importers::extension_of(&args.file) == "toml" {
         return preview_timeline(&args);
     }
-    let groom = super::read_groom(&args.file)?;
+    let mut groom = super::read_groom(&args.file)?;
+    if args.rest {
+        groom = rest_shape_of_state(&args.file, groom)?;
+    }
+    let view = args.view.unwrap_or_else(|| match groom.frames.last() {
+        Some(last) => {
+            let mut moved = groom.clone();
+            moved.points = last.points.clone();
+            preview::view_showing_change(&groom, &moved)
+        }
+        None => preview::view_showing_spread(&groom),
+    });
     let options = PreviewOptions {
         width: args.size.0,
         height: args.size.1,
-        view: args.view,
+        view,
         frame: args.frame,
         color_by: args.color.clone(),
         ..PreviewOptions::default()
@@ -81,6 +98,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
                 label,
                 groom: &groom,
                 frame: Some(frame),
+                surfaces: &[],
             })
             .collect();
         preview::render_sheet(&entries, &options)
@@ -88,6 +106,27 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     .map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
+}
+
+/// The rest shape of a `state` export: the state rebuilt (metres, Y up) and
+/// its rest pose integrated from the bonds' memories. The material is the
+/// default one (a state file does not record the timeline's).
+fn rest_shape_of_state(file: &Path, mut groom: groom::Groom) -> anyhow::Result<groom::Groom> {
+    use groombake::sim::{attribute_names, Material, StrandSet};
+    if groom.attribute(attribute_names::FRAME_XYZ).is_none() {
+        return Err(BadInput(format!(
+            "{}: --rest needs a `state` export (it has no {} attribute) or a timeline",
+            file.display(),
+            attribute_names::FRAME_XYZ
+        ))
+        .into());
+    }
+    groom.convert_to(groom::Units::METERS, groom::UpAxis::Y);
+    let strands = StrandSet::from_state(&groom, &Material::default())
+        .map_err(|e| BadInput(format!("{}: {e}", file.display())))?;
+    groom.points = strands.rest_pose();
+    groom.frames.clear();
+    Ok(groom)
 }
 
 /// Bad requests become exit code 2, naming the file they concern.
@@ -103,7 +142,9 @@ fn explain(file: &Path, error: PreviewError) -> anyhow::Error {
 /// the first stage and after each stage; `--frame N` draws only snapshot N
 /// (0 = before). The timeline's `[preview]` gives defaults for colour and view.
 fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
+    use groombake::preview::Surface;
     use groombake::timeline::bake::{bake, sheet_options, BakeOptions};
+    use groombake::timeline::surfaces::snapshot_surfaces;
     use groombake::timeline::Timeline;
     if !args.frames.is_empty() {
         return Err(BadInput(format!(
@@ -118,29 +159,46 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
         ..BakeOptions::default()
     };
     let outcome = bake(&timeline, &options).map_err(super::bake::classify)?;
-    let mut preview_options = sheet_options(&timeline);
+    let mut preview_options = sheet_options(&timeline, &outcome.snapshots);
     preview_options.width = args.size.0;
     preview_options.height = args.size.1;
-    preview_options.view = args.view;
+    if let Some(view) = args.view {
+        preview_options.view = view;
+    }
     if args.color.is_some() {
         preview_options.color_by = args.color.clone();
     }
-    let snapshots: Vec<&(String, groom::Groom)> = match args.frame {
-        Some(n) => vec![outcome.snapshots.get(n).ok_or_else(|| {
-            BadInput(format!(
-                "{}: --frame {n}: the timeline has {} snapshots (before and after each stage)",
-                args.file.display(),
-                outcome.snapshots.len()
-            ))
-        })?],
-        None => outcome.snapshots.iter().collect(),
+    let surfaces = snapshot_surfaces(&timeline).map_err(super::bake::classify)?;
+    let rest = ("rest shape".to_string(), outcome.rest.clone());
+    // The rest shape is drawn alone: nothing holds it.
+    let alone: &[Surface] = &[];
+    let with_surfaces = |n: usize| surfaces.get(n).map_or(alone, Vec::as_slice);
+    let snapshots: Vec<(&(String, groom::Groom), &[Surface])> = match args.frame {
+        _ if args.rest => vec![(&rest, alone)],
+        Some(n) => vec![(
+            outcome.snapshots.get(n).ok_or_else(|| {
+                BadInput(format!(
+                    "{}: --frame {n}: the timeline has {} snapshots (before and after each stage)",
+                    args.file.display(),
+                    outcome.snapshots.len()
+                ))
+            })?,
+            with_surfaces(n),
+        )],
+        None => outcome
+            .snapshots
+            .iter()
+            .enumerate()
+            .map(|(n, snapshot)| (snapshot, with_surfaces(n)))
+            .collect(),
     };
     let entries: Vec<SheetEntry> = snapshots
         .iter()
-        .map(|(label, groom)| SheetEntry {
+        .map(|((label, groom), surfaces)| SheetEntry {
             label,
             groom,
             frame: None,
+            surfaces,
         })
         .collect();
     let image = preview::render_sheet(&entries, &preview_options)

@@ -8,8 +8,10 @@ mod camera;
 mod font;
 mod raster;
 mod shadow;
+mod surfaces;
 
 pub use camera::Camera;
+pub use surfaces::Surface;
 
 use camera::{dot, normalize, sub, Vec3};
 use groom::{AttributeValues, Groom, Scope};
@@ -51,6 +53,68 @@ impl std::str::FromStr for View {
                 "unknown view '{s}' (expected front, side, top or persp)"
             )),
         }
+    }
+}
+
+/// The axis view (front, side or top) that shows most of the change from
+/// `before` to `after` (same topology): the one looking along the direction
+/// the points moved least in. With no change to show, the view of
+/// [`view_showing_spread`].
+pub fn view_showing_change(before: &Groom, after: &Groom) -> View {
+    let moved = |axis: usize| -> f64 {
+        before
+            .points
+            .iter()
+            .zip(&after.points)
+            .map(|(&a, &b)| {
+                let (a, b) = (before.up_axis.to_y_up(a), after.up_axis.to_y_up(b));
+                let d = f64::from(b[axis] - a[axis]);
+                if d.is_finite() {
+                    d * d
+                } else {
+                    0.0
+                }
+            })
+            .sum()
+    };
+    let along = [moved(0), moved(1), moved(2)];
+    if before.points.len() != after.points.len() || along.iter().sum::<f64>() <= 0.0 {
+        return view_showing_spread(after);
+    }
+    least_axis_view(along)
+}
+
+/// The axis view looking along the groom's thinnest extent, so it shows the
+/// most of it (a swatch face on, not one strand thick from its edge).
+pub fn view_showing_spread(groom: &Groom) -> View {
+    let mut low = [f64::INFINITY; 3];
+    let mut high = [f64::NEG_INFINITY; 3];
+    for &p in &groom.points {
+        let p = groom.up_axis.to_y_up(p);
+        for k in 0..3 {
+            if p[k].is_finite() {
+                low[k] = low[k].min(f64::from(p[k]));
+                high[k] = high[k].max(f64::from(p[k]));
+            }
+        }
+    }
+    let extent = [0, 1, 2].map(|k| (high[k] - low[k]).max(0.0));
+    if extent.iter().any(|e| !e.is_finite()) {
+        return View::Front;
+    }
+    least_axis_view(extent)
+}
+
+/// The view along the axis (x, y, z; Y up) of the smallest value; ties go to
+/// front, then side.
+fn least_axis_view(along: [f64; 3]) -> View {
+    let [x, y, z] = along;
+    if z <= x && z <= y {
+        View::Front
+    } else if x <= y {
+        View::Side
+    } else {
+        View::Top
     }
 }
 
@@ -215,6 +279,9 @@ pub struct SheetEntry<'a> {
     pub groom: &'a Groom,
     /// As [`PreviewOptions::frame`].
     pub frame: Option<usize>,
+    /// Colliders to draw with the hair, semi-transparent (Y up, the
+    /// groom's units).
+    pub surfaces: &'a [Surface],
 }
 
 /// Draws a groom.
@@ -223,6 +290,7 @@ pub fn render(groom: &Groom, options: &PreviewOptions) -> Result<Image, PreviewE
         label: "",
         groom,
         frame: options.frame,
+        surfaces: &[],
     };
     let scene = Scene::new(&[entry], options)?;
     scene.draw(&entry)
@@ -319,6 +387,28 @@ pub fn attribute_range(groom: &Groom, name: &str) -> Result<Option<(f32, f32)>, 
     Ok(finite_range(values.iter().copied()))
 }
 
+/// The range an attribute means, whatever values a groom holds: bond rates
+/// and wetness are fractions of 0 to 1. A fixed range gives a value the same
+/// colour in every picture (alone or in a contact sheet beside others).
+pub fn natural_range(name: &str) -> Option<(f32, f32)> {
+    use crate::sim::attribute_names::{BOND_RATES, WETNESS};
+    let fraction = BOND_RATES.contains(&name) || name == WETNESS;
+    fraction.then_some((0.0, 1.0))
+}
+
+/// A constant attribute spans nothing: the ramp from 0 to its value (0 to 1
+/// for zero), so it is drawn at one end, with a legend that reads.
+fn widen_constant((lo, hi): (f32, f32)) -> (f32, f32) {
+    if lo < hi {
+        return (lo, hi);
+    }
+    match lo {
+        v if v > 0.0 => (0.0, v),
+        v if v < 0.0 => (v, 0.0),
+        _ => (0.0, 1.0),
+    }
+}
+
 fn finite_range(values: impl Iterator<Item = f32>) -> Option<(f32, f32)> {
     values
         .filter(|v| v.is_finite())
@@ -400,7 +490,9 @@ impl<'o> Scene<'o> {
                     });
                 }
             }
-            range = range.or(combined);
+            range = range
+                .or(natural_range(name))
+                .or(combined.map(widen_constant));
         }
         for entry in entries {
             pose(entry.groom, entry.frame)?;
@@ -455,11 +547,19 @@ impl<'o> Scene<'o> {
         if points.len() > u32::MAX as usize {
             return Err(PreviewError::TooManyPoints);
         }
-        let background = |row: usize| {
+        let backdrop = match (&self.camera, entry.surfaces.is_empty()) {
+            (Some(camera), false) => surfaces::rasterize(entry.surfaces, camera, width, height),
+            _ => Vec::new(),
+        };
+        let background = |row: usize, column: usize| {
             // A neutral grey, a little lighter at the top.
             let f = row as f32 / height.max(1) as f32;
             let v = 0.16 - 0.09 * f;
-            [v, v, v * 1.04]
+            let plain = [v, v, v * 1.04];
+            match backdrop.get(row * width + column) {
+                Some(Some(surface)) => surfaces::mix(plain, *surface, surfaces::BEHIND_HAIR),
+                _ => plain,
+            }
         };
         let colors = match &options.color_by {
             Some(name) => Some(scalar_values(entry.groom, name)?),
@@ -489,6 +589,19 @@ impl<'o> Scene<'o> {
             }
             .render(background),
         };
+        let mut pixels = pixels;
+        // The surfaces again, faintly over the hair: hair in front of a
+        // surface shows, and so does the surface behind hair.
+        for (rgb, surface) in pixels.chunks_exact_mut(3).zip(&backdrop) {
+            if let Some(surface) = surface {
+                let over = surface.map(raster::encode_srgb);
+                for (byte, s) in rgb.iter_mut().zip(over) {
+                    let mixed =
+                        f32::from(*byte) + (f32::from(s) - f32::from(*byte)) * surfaces::OVER_HAIR;
+                    *byte = mixed.round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
         let mut image = Image {
             width: options.width,
             height: options.height,

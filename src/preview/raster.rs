@@ -122,9 +122,9 @@ fn resolve(pixel: &[Layer; LAYERS], background: [f32; 3]) -> [f32; 3] {
 }
 
 impl Raster<'_> {
-    /// Composites every segment over `background(row)` and returns RGB8
-    /// rows (sRGB encoded).
-    pub fn render(self, background: impl Fn(usize) -> [f32; 3] + Sync) -> Vec<u8> {
+    /// Composites every segment over `background(row, column)` and returns
+    /// RGB8 rows (sRGB encoded).
+    pub fn render(self, background: impl Fn(usize, usize) -> [f32; 3] + Sync) -> Vec<u8> {
         let vertices = self.vertices;
         // Strands far to near by their mean depth. Each pixel then orders its
         // nearest fragments by their own depth (see `blend`); keeping a
@@ -203,9 +203,10 @@ impl Raster<'_> {
                             .zip(rows.chunks_exact_mut(width * 3))
                             .enumerate()
                         {
-                            let back = background(row0 + r);
-                            for (pixel, rgb) in line.iter().zip(bytes.chunks_exact_mut(3)) {
-                                let color = resolve(pixel, back);
+                            for (column, (pixel, rgb)) in
+                                line.iter().zip(bytes.chunks_exact_mut(3)).enumerate()
+                            {
+                                let color = resolve(pixel, background(row0 + r, column));
                                 for (byte, c) in rgb.iter_mut().zip(color) {
                                     *byte = encode.encode(c);
                                 }

@@ -185,7 +185,7 @@ fn colouring_maps_the_minimum_to_blue_and_the_maximum_to_red() {
         vec![[1.0, -1.0, 0.0], [1.0, 1.0, 0.0]],
     ]);
     groom.set_attribute(Attribute::per_strand(
-        "bond_hydrogen",
+        "heat",
         AttributeValues::Float(vec![0.25, 3.5]),
     ));
     groom.set_attribute(Attribute::per_strand(
@@ -193,7 +193,7 @@ fn colouring_maps_the_minimum_to_blue_and_the_maximum_to_red() {
         AttributeValues::Float(vec![0.08, 0.08]),
     ));
     let options = PreviewOptions {
-        color_by: Some("bond_hydrogen".into()),
+        color_by: Some("heat".into()),
         ..options(400, 200)
     };
     let image = render(&groom, &options).unwrap();
@@ -218,12 +218,9 @@ fn colouring_maps_the_minimum_to_blue_and_the_maximum_to_red() {
 fn legend_shows_the_ramp_and_the_range() {
     let mut groom = generated(300, RootLayout::Swatch, StrandShape::Straight);
     let values: Vec<f32> = (0..groom.vertex_count()).map(|i| i as f32 * 0.01).collect();
-    groom.set_attribute(Attribute::new(
-        "bond_hydrogen",
-        AttributeValues::Float(values),
-    ));
+    groom.set_attribute(Attribute::new("heat", AttributeValues::Float(values)));
     let options = PreviewOptions {
-        color_by: Some("bond_hydrogen".into()),
+        color_by: Some("heat".into()),
         ..options(640, 480)
     };
     let image = render(&groom, &options).unwrap();
@@ -240,9 +237,7 @@ fn legend_shows_the_ramp_and_the_range() {
     let last_blue = column.iter().rposition(|&p| is_blue(p)).unwrap();
     assert!(first_red < last_blue);
     assert_eq!(
-        attribute_range(&groom, "bond_hydrogen")
-            .unwrap()
-            .map(|r| r.0),
+        attribute_range(&groom, "heat").unwrap().map(|r| r.0),
         Some(0.0)
     );
     assert_eq!(format_number(0.0), "0");
@@ -444,6 +439,7 @@ fn contact_sheet_lays_pictures_side_by_side_with_labels() {
             label: if frame == 0 { "frame 0" } else { "frame 1" },
             groom: &groom,
             frame: Some(frame),
+            surfaces: &[],
         })
         .collect();
     let sheet = render_sheet(&entries, &options(120, 90)).unwrap();
@@ -460,4 +456,96 @@ fn contact_sheet_lays_pictures_side_by_side_with_labels() {
     let many = vec![entries[0]; 20_000];
     let error = render_sheet(&many, &options(1000, 1000)).unwrap_err();
     assert!(matches!(error, PreviewError::SheetTooLarge { .. }));
+}
+
+/// Mean colour of the hair pixels of the picture's left `picture_width` columns.
+fn mean_hair_color(image: &Image, picture_width: u32) -> [f32; 3] {
+    let hair: Vec<[u8; 3]> = hair_pixels(image)
+        .into_iter()
+        .filter(|p| p.0 < picture_width)
+        .map(|(x, y)| image.pixel(x, y).unwrap())
+        .collect();
+    assert!(hair.len() > 50, "only {} hair pixels", hair.len());
+    let mut sum = [0.0f32; 3];
+    for p in &hair {
+        for k in 0..3 {
+            sum[k] += f32::from(p[k]);
+        }
+    }
+    sum.map(|c| c / hair.len() as f32)
+}
+
+fn swatch_with_bonds(rate: f32) -> Groom {
+    let mut groom = generated(200, RootLayout::Swatch, StrandShape::Straight);
+    let rates = vec![rate; groom.vertex_count()];
+    groom.set_attribute(Attribute::new(
+        "bond_hydrogen",
+        AttributeValues::Float(rates),
+    ));
+    groom
+}
+
+#[test]
+fn intact_bonds_are_red_alone_and_in_a_sheet() {
+    let options = PreviewOptions {
+        color_by: Some("bond_hydrogen".into()),
+        ..options(320, 320)
+    };
+    let picture_width = 320 - legend_width(320, 320);
+    let intact = swatch_with_bonds(1.0);
+    let alone = mean_hair_color(&render(&intact, &options).unwrap(), picture_width);
+    assert!(
+        alone[0] > 2.0 * alone[1] && alone[0] > 2.0 * alone[2],
+        "all bonds intact (1.0) drawn {alone:?}, not red"
+    );
+    // The same snapshot beside a broken one in a sheet: the same colour.
+    let broken = swatch_with_bonds(0.0);
+    let entries = [
+        SheetEntry {
+            label: "",
+            groom: &intact,
+            frame: None,
+            surfaces: &[],
+        },
+        SheetEntry {
+            label: "",
+            groom: &broken,
+            frame: None,
+            surfaces: &[],
+        },
+    ];
+    let scene = Scene::new(&entries, &options).unwrap();
+    let in_sheet = mean_hair_color(&scene.draw(&entries[0]).unwrap(), picture_width);
+    for k in 0..3 {
+        assert!(
+            (alone[k] - in_sheet[k]).abs() < 2.0,
+            "alone {alone:?}, in a sheet {in_sheet:?}"
+        );
+    }
+    let broken_color = mean_hair_color(&scene.draw(&entries[1]).unwrap(), picture_width);
+    assert!(
+        broken_color[2] > 2.0 * broken_color[0],
+        "all bonds broken (0.0) drawn {broken_color:?}, not blue"
+    );
+}
+
+#[test]
+fn a_constant_attribute_is_drawn_at_the_end_of_the_ramp_it_reaches() {
+    let mut groom = generated(200, RootLayout::Swatch, StrandShape::Straight);
+    let values = vec![2.5; groom.vertex_count()];
+    groom.set_attribute(Attribute::new("heat", AttributeValues::Float(values)));
+    let options = PreviewOptions {
+        color_by: Some("heat".into()),
+        ..options(320, 320)
+    };
+    let picture_width = 320 - legend_width(320, 320);
+    let color = mean_hair_color(&render(&groom, &options).unwrap(), picture_width);
+    assert!(
+        color[0] > 2.0 * color[1] && color[0] > 2.0 * color[2],
+        "a constant 2.5 drawn {color:?}: expected the red end (legend 0 to 2.5)"
+    );
+    assert_eq!(widen_constant((2.5, 2.5)), (0.0, 2.5));
+    assert_eq!(widen_constant((-1.0, -1.0)), (-1.0, 0.0));
+    assert_eq!(widen_constant((0.0, 0.0)), (0.0, 1.0));
+    assert_eq!(widen_constant((0.2, 0.7)), (0.2, 0.7));
 }

@@ -36,6 +36,8 @@ pub struct BakeOptions {
 pub struct BakeOutcome {
     pub report: BakeReport,
     pub snapshots: Vec<(String, Groom)>,
+    /// The plastic rest shape at the end (as the `rest` export writes it).
+    pub rest: Groom,
 }
 
 /// Why a bake failed.
@@ -161,7 +163,7 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
     Ok(groom)
 }
 
-fn shape_of(
+pub(crate) fn shape_of(
     timeline: &Timeline,
     spec: &ShapeSpec,
 ) -> Result<sim::parry3d::shape::SharedShape, BakeError> {
@@ -196,7 +198,7 @@ fn shape_of(
     })
 }
 
-fn pose_of(pose: KeyPose) -> sim::Pose {
+pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
     let t = pose.translation.map(|c| c as f32);
     let r = pose.rotation.map(|c| c as f32);
     sim::Pose::from_parts(
@@ -279,14 +281,30 @@ fn groom_now(base: &Groom, strands: &StrandSet, points: Vec<[f32; 3]>, with_stat
     groom
 }
 
-/// The preview options of the timeline's `[preview]` (or the defaults).
-pub fn sheet_options(timeline: &Timeline) -> crate::preview::PreviewOptions {
+/// The preview options of the timeline's `[preview]` (or the defaults). The
+/// view, unless the timeline names one, is the one that shows most of the
+/// change from the first to the last snapshot.
+pub fn sheet_options(
+    timeline: &Timeline,
+    snapshots: &[(String, Groom)],
+) -> crate::preview::PreviewOptions {
     let mut options = crate::preview::PreviewOptions::default();
+    let named_view = timeline
+        .file
+        .preview
+        .as_ref()
+        .and_then(|p| p.view.get_ref().parse().ok());
+    options.view = match (named_view, snapshots.first(), snapshots.last()) {
+        (Some(view), _, _) => view,
+        (None, Some((_, first)), Some((_, last))) => {
+            crate::preview::view_showing_change(first, last)
+        }
+        _ => options.view,
+    };
     if let Some(p) = &timeline.file.preview {
         let [w, h] = *p.size.get_ref();
         options.width = w;
         options.height = h;
-        options.view = p.view.get_ref().parse().unwrap_or(options.view);
         options.color_by = p.color.as_ref().map(|c| c.get_ref().clone());
     }
     options
@@ -298,13 +316,16 @@ fn write_sheet(
     snapshots: &[(String, Groom)],
     path: &Path,
 ) -> Result<(), BakeError> {
-    let options = sheet_options(timeline);
+    let options = sheet_options(timeline, snapshots);
+    let surfaces = super::surfaces::snapshot_surfaces(timeline)?;
     let entries: Vec<crate::preview::SheetEntry> = snapshots
         .iter()
-        .map(|(label, groom)| crate::preview::SheetEntry {
+        .zip(&surfaces)
+        .map(|((label, groom), surfaces)| crate::preview::SheetEntry {
             label,
             groom,
             frame: None,
+            surfaces,
         })
         .collect();
     let image = crate::preview::render_sheet(&entries, &options)?;
@@ -689,5 +710,10 @@ fn bake_in_pool(
     }
     report.simulated_seconds = total_time;
     report.wall_seconds = started.elapsed().as_secs_f64();
-    Ok(BakeOutcome { report, snapshots })
+    let rest = groom_now(&groom, &strands, strands.rest_pose(), false);
+    Ok(BakeOutcome {
+        report,
+        snapshots,
+        rest,
+    })
 }

@@ -7,6 +7,7 @@ pub mod motion;
 pub mod report;
 pub mod schema;
 pub mod stages;
+pub mod surfaces;
 
 use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
 use serde_spanned::Spanned;
@@ -335,8 +336,11 @@ impl Timeline {
                     "preview size must be 1 to 4096 pixels each way".into(),
                 );
             }
-            if let Err(e) = preview.view.get_ref().parse::<crate::preview::View>() {
-                return fail(preview.view.span(), e);
+            let view = preview.view.get_ref();
+            if view != schema::AUTO_VIEW {
+                if let Err(e) = view.parse::<crate::preview::View>() {
+                    return fail(preview.view.span(), format!("{e}, or auto"));
+                }
             }
         }
         Ok(dt)

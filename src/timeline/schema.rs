@@ -41,7 +41,8 @@ pub struct PreviewSpec {
     /// Size of each picture, pixels.
     #[serde(default = "default_preview_size")]
     pub size: Spanned<[u32; 2]>,
-    /// `front`, `side`, `top` or `persp`.
+    /// `front`, `side`, `top`, `persp`, or `auto` (the default): the axis
+    /// view that shows most of the change from before to after the bake.
     #[serde(default = "default_preview_view")]
     pub view: Spanned<String>,
 }
@@ -50,8 +51,11 @@ fn default_preview_size() -> Spanned<[u32; 2]> {
     Spanned::new(0..0, [512, 512])
 }
 
+/// `[preview] view = "auto"`: see [`PreviewSpec::view`].
+pub const AUTO_VIEW: &str = "auto";
+
 fn default_preview_view() -> Spanned<String> {
-    Spanned::new(0..0, "front".to_string())
+    Spanned::new(0..0, AUTO_VIEW.to_string())
 }
 
 /// Where the groom comes from: a file (any importer, including a `state`

@@ -3,7 +3,7 @@
 //! other tools, and damaged files. Exported files go to the alembic3d
 //! validator of `.ci/run` with what it must find in them.
 
-use crate::util::{hand_to_validators, shared_data, TestDir};
+use crate::util::{hand_to_validators, test_data, TestDir};
 use groom::Frame;
 use serde_json::json;
 use std::path::Path;
@@ -55,7 +55,7 @@ fn blender_archive_reads_as_metres() {
 #[test]
 fn bangs_hair_to_abc_reads_as_100_curves_1165_points() {
     let dir = TestDir::new();
-    let source = shared_data(BANGS_HAIR);
+    let source = test_data(BANGS_HAIR);
     dir.run_ok(&["convert", source.to_str().unwrap(), "bangs.abc"]);
     let summary = dir.inspect("bangs.abc");
     assert_eq!(summary["format"], "abc");
@@ -88,7 +88,7 @@ fn bangs_hair_to_abc_reads_as_100_curves_1165_points() {
 #[test]
 fn the_same_conversion_gives_the_same_bytes() {
     let dir = TestDir::new();
-    let source = shared_data(BANGS_HAIR);
+    let source = test_data(BANGS_HAIR);
     dir.run_ok(&["convert", source.to_str().unwrap(), "a.abc"]);
     dir.run_ok(&["convert", source.to_str().unwrap(), "b.abc"]);
     dir.run_ok(&["convert", "a.abc", "c.abc"]);
@@ -104,7 +104,7 @@ fn the_same_conversion_gives_the_same_bytes() {
 #[test]
 fn animated_export_reads_one_sample_per_frame_at_the_right_times() {
     let dir = TestDir::new();
-    let mut groom = importers::read(&shared_data(BANGS_HAIR)).unwrap();
+    let mut groom = importers::read(&test_data(BANGS_HAIR)).unwrap();
     groom.set_attribute(groom::Attribute::new(
         "wetness",
         groom::AttributeValues::Float(
@@ -178,12 +178,12 @@ fn animated_export_reads_one_sample_per_frame_at_the_right_times() {
 #[test]
 fn hairutil_bangs_abc_matches_its_hair_file() {
     let dir = TestDir::new();
-    let path = shared_data(BANGS_ABC);
+    let path = test_data(BANGS_ABC);
     let summary = dir.inspect(path.to_str().unwrap());
     assert_eq!(summary["strands"], 100);
     assert_eq!(summary["vertices"], 1165);
     let abc = importers::read(&path).unwrap();
-    let hair = importers::read(&shared_data(BANGS_HAIR)).unwrap();
+    let hair = importers::read(&test_data(BANGS_HAIR)).unwrap();
     assert_eq!(abc.strand_vertex_counts, hair.strand_vertex_counts);
     assert_eq!(abc.points, hair.points);
 }
@@ -191,7 +191,7 @@ fn hairutil_bangs_abc_matches_its_hair_file() {
 #[test]
 fn blender_static_abc_imports_with_its_counts_and_points() {
     let dir = TestDir::new();
-    let path = shared_data(BLENDER_ABC);
+    let path = test_data(BLENDER_ABC);
     let summary = dir.inspect(path.to_str().unwrap());
     assert_eq!(summary["strands"], 5, "{summary}");
     assert_eq!(summary["vertices"], 20, "{summary}");
@@ -214,7 +214,7 @@ fn blender_static_abc_imports_with_its_counts_and_points() {
 #[test]
 fn truncated_abc_exits_2_naming_file_and_offset() {
     let dir = TestDir::new();
-    let bytes = std::fs::read(shared_data(BANGS_ABC)).unwrap();
+    let bytes = std::fs::read(test_data(BANGS_ABC)).unwrap();
     for cut in [0, 10, 16, 100, bytes.len() / 2, bytes.len() - 1] {
         std::fs::write(dir.path("cut.abc"), &bytes[..cut]).unwrap();
         let stderr = dir.run_fail(&["inspect", "cut.abc"], 2);
@@ -230,7 +230,7 @@ fn truncated_abc_exits_2_naming_file_and_offset() {
 #[test]
 fn corrupted_abc_exits_2_with_a_clear_error() {
     let dir = TestDir::new();
-    let bytes = std::fs::read(shared_data(BANGS_ABC)).unwrap();
+    let bytes = std::fs::read(test_data(BANGS_ABC)).unwrap();
     // An unfinished file: the frozen flag still 0.
     let mut unfrozen = bytes.clone();
     unfrozen[5] = 0;

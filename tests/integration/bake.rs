@@ -254,7 +254,14 @@ fn typo_missing_file_and_negative_duration_fail_early_with_line_and_column() {
 #[test]
 fn validate_accepts_every_sample() {
     let dir = TestDir::new();
-    for name in ["bed_hair.toml", "blow_dry.toml", "perm.toml", "wind.toml"] {
+    for name in [
+        "bed_hair.toml",
+        "blow_dry.toml",
+        "perm.toml",
+        "wind.toml",
+        "bangs.toml",
+        "bed_head.toml",
+    ] {
         let path = sample(name);
         let output = dir.run_ok(&["validate", path.to_str().unwrap()]);
         assert!(String::from_utf8_lossy(&output.stdout).contains("ok"));

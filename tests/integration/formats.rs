@@ -2,7 +2,7 @@
 //! USC-HairSalon/cyHair files, lossless `.hair`, glTF handed to the Khronos
 //! validator, animated glTF round trips, and truncated input.
 
-use crate::util::{hand_to_validators, sample, shared_data, TestDir};
+use crate::util::{hand_to_validators, sample, test_data, TestDir};
 use groom::Frame;
 use serde_json::json;
 
@@ -13,7 +13,7 @@ const BANGS_DATA: &str = "hairutil_Bangs_100.data";
 fn bangs_hair_and_data_agree_to_the_bit() {
     let dir = TestDir::new();
     for name in [BANGS_HAIR, BANGS_DATA] {
-        let path = shared_data(name);
+        let path = test_data(name);
         let summary = dir.inspect(path.to_str().unwrap());
         assert_eq!(summary["strands"], 100, "{name}: {summary}");
         assert_eq!(summary["vertices"], 1165, "{name}: {summary}");
@@ -29,8 +29,8 @@ fn bangs_hair_and_data_agree_to_the_bit() {
             assert!((got - expected).abs() < 5e-4, "{name}: {first:?}");
         }
     }
-    let hair = importers::read(&shared_data(BANGS_HAIR)).unwrap();
-    let data = importers::read(&shared_data(BANGS_DATA)).unwrap();
+    let hair = importers::read(&test_data(BANGS_HAIR)).unwrap();
+    let data = importers::read(&test_data(BANGS_DATA)).unwrap();
     assert_eq!(hair.strand_vertex_counts, data.strand_vertex_counts);
     let bits = |g: &groom::Groom| -> Vec<[u32; 3]> {
         g.points.iter().map(|p| p.map(f32::to_bits)).collect()
@@ -41,7 +41,7 @@ fn bangs_hair_and_data_agree_to_the_bit() {
 #[test]
 fn hair_to_hair_keeps_the_file_byte_for_byte() {
     let dir = TestDir::new();
-    let source = shared_data(BANGS_HAIR);
+    let source = test_data(BANGS_HAIR);
     dir.run_ok(&["convert", source.to_str().unwrap(), "copy.hair"]);
     let original = std::fs::read(&source).unwrap();
     let copy = std::fs::read(dir.path("copy.hair")).unwrap();
@@ -53,7 +53,7 @@ fn hair_to_hair_keeps_the_file_byte_for_byte() {
 #[test]
 fn data_to_glb_validates() {
     let dir = TestDir::new();
-    let source = shared_data(BANGS_DATA);
+    let source = test_data(BANGS_DATA);
     dir.run_ok(&["convert", source.to_str().unwrap(), "bangs.glb"]);
     let summary = dir.inspect("bangs.glb");
     assert_eq!(summary["strands"], 100);
@@ -72,7 +72,7 @@ fn data_to_glb_validates() {
 #[test]
 fn hair_to_gltf_and_obj_keep_counts() {
     let dir = TestDir::new();
-    let source = shared_data(BANGS_HAIR);
+    let source = test_data(BANGS_HAIR);
     for out in ["bangs.gltf", "bangs.obj", "bangs.data"] {
         dir.run_ok(&["convert", source.to_str().unwrap(), out]);
         let summary = dir.inspect(out);
@@ -169,7 +169,7 @@ fn animated_glb_round_trips_its_frames() {
 #[test]
 fn hair_cut_to_700_bytes_exits_2_naming_file_and_offset() {
     let dir = TestDir::new();
-    let bytes = std::fs::read(shared_data(BANGS_HAIR)).unwrap();
+    let bytes = std::fs::read(test_data(BANGS_HAIR)).unwrap();
     std::fs::write(dir.path("cut.hair"), &bytes[..700]).unwrap();
     let stderr = dir.run_fail(&["inspect", "cut.hair"], 2);
     assert!(
@@ -183,7 +183,7 @@ fn hair_cut_to_700_bytes_exits_2_naming_file_and_offset() {
 #[test]
 fn malformed_inputs_exit_2_without_output() {
     let dir = TestDir::new();
-    let hair = std::fs::read(shared_data(BANGS_HAIR)).unwrap();
+    let hair = std::fs::read(test_data(BANGS_HAIR)).unwrap();
     let mut wrong_magic = hair.clone();
     wrong_magic[..4].copy_from_slice(b"HIAR");
     std::fs::write(dir.path("magic.hair"), &wrong_magic).unwrap();
@@ -191,7 +191,7 @@ fn malformed_inputs_exit_2_without_output() {
     // First coordinate: header 128 + 100 u16 segment counts.
     nan[328..332].copy_from_slice(&f32::NAN.to_le_bytes());
     std::fs::write(dir.path("nan.hair"), &nan).unwrap();
-    let mut data = std::fs::read(shared_data(BANGS_DATA)).unwrap();
+    let mut data = std::fs::read(test_data(BANGS_DATA)).unwrap();
     data[..4].copy_from_slice(&1_000_000_000i32.to_le_bytes());
     std::fs::write(dir.path("count.data"), &data).unwrap();
     std::fs::write(dir.path("bad.obj"), "v 0 0 0\nv 1 1 1\nl 1 3\n").unwrap();

@@ -107,3 +107,13 @@ fn golden_perm() {
 fn golden_wind() {
     bake_sample("wind");
 }
+
+#[test]
+fn golden_bangs() {
+    bake_sample("bangs");
+}
+
+#[test]
+fn golden_bed_head() {
+    bake_sample("bed_head");
+}

@@ -2,7 +2,7 @@
 //! `vertices`, `bounds`, `units`, `up_axis`, `frames`, `attributes`) for a
 //! file of every format.
 
-use crate::util::{shared_data, TestDir};
+use crate::util::{test_data, TestDir};
 
 /// The Bangs groom of the shared data (100 strands, 1165 points, cm).
 const BANGS_STRANDS: u64 = 100;
@@ -60,7 +60,7 @@ fn check_keys(summary: &serde_json::Value, file: &str) {
 #[test]
 fn inspect_json_has_the_promised_keys_for_every_format() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     let bangs = bangs.to_str().unwrap();
     // Formats no shared file is in: converted from the Bangs groom.
     for out in [
@@ -75,7 +75,7 @@ fn inspect_json_has_the_promised_keys_for_every_format() {
     let cases: Vec<(String, &str, &str)> = vec![
         (bangs.to_string(), "hair", "cm"),
         (
-            shared_data("hairutil_Bangs_100.data").display().to_string(),
+            test_data("hairutil_Bangs_100.data").display().to_string(),
             "data",
             "cm",
         ),
@@ -85,7 +85,7 @@ fn inspect_json_has_the_promised_keys_for_every_format() {
         ("bangs.usdc".into(), "usd", "cm"),
         ("bangs.usd".into(), "usd", "cm"),
         (
-            shared_data("hairutil_Bangs_100.abc").display().to_string(),
+            test_data("hairutil_Bangs_100.abc").display().to_string(),
             "abc",
             "cm",
         ),
@@ -111,7 +111,7 @@ fn inspect_json_has_the_promised_keys_for_every_format() {
         }
     }
     // A USD file another tool wrote (Blender), with its own strand count.
-    let blender = shared_data("blender501_hair.usda");
+    let blender = test_data("blender501_hair.usda");
     let summary = dir.inspect(blender.to_str().unwrap());
     check_keys(&summary, "blender501_hair.usda");
     assert_eq!(summary["format"], "usd");

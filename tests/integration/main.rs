@@ -13,6 +13,8 @@ mod cli;
 mod formats;
 mod golden;
 mod inspect;
+mod install;
 mod preview;
+mod refusals;
 mod roundtrip;
 mod usd;

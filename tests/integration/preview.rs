@@ -1,6 +1,6 @@
 //! `groombake preview`: pictures of grooms, contact sheets of frames.
 
-use crate::util::{shared_data, TestDir};
+use crate::util::{test_data, TestDir};
 use groom::{Attribute, AttributeValues, Frame};
 use groombake::generate::{generate, GeneratorParameters, RootLayout, StrandShape};
 use std::path::Path;
@@ -31,7 +31,7 @@ fn hair_pixels(width: u32, pixels: &[u8]) -> Vec<(u32, u32)> {
 }
 
 /// A small animated groom as a glTF file: a swatch that swings to +X.
-fn animated_swatch(dir: &TestDir) -> String {
+pub(crate) fn animated_swatch(dir: &TestDir) -> String {
     let mut groom = generate(&GeneratorParameters {
         strands: 300,
         layout: RootLayout::Swatch,
@@ -70,7 +70,7 @@ fn animated_swatch(dir: &TestDir) -> String {
 #[test]
 fn shows_the_bangs() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     dir.run_ok(&["preview", bangs.to_str().unwrap(), "-o", "p.png"]);
     let (width, height, pixels) = decode(&dir.path("p.png"));
     assert_eq!((width, height), (1024, 1024));
@@ -91,7 +91,7 @@ fn shows_the_bangs() {
 #[test]
 fn same_input_same_bytes() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     let bangs = bangs.to_str().unwrap();
     for (name, view) in [("a.png", "persp"), ("b.png", "persp"), ("c.png", "top")] {
         dir.run_ok(&[
@@ -144,7 +144,7 @@ fn sheet_of_frames_coloured_by_an_attribute() {
 #[test]
 fn bad_requests_exit_2_with_a_reason() {
     let dir = TestDir::new();
-    let bangs = shared_data("hairutil_Bangs_100.hair");
+    let bangs = test_data("hairutil_Bangs_100.hair");
     let bangs = bangs.to_str().unwrap();
     let stderr = dir.run_fail(
         &["preview", bangs, "-o", "p.png", "--color", "bond_hydrogen"],
@@ -184,4 +184,225 @@ fn unknown_frame_of_an_animation_is_refused() {
         "{stderr}"
     );
     assert!(!dir.path("p.png").exists());
+}
+
+/// A small swatch that gravity along `gravity` swings off the vertical: the
+/// final pose is tilted, the rest shape (bonds intact) hangs straight.
+fn swinging_timeline(gravity: [f32; 3], preview: &str) -> String {
+    format!(
+        r#"seed = 1
+[groom]
+generate = {{ layout = "swatch", strands = 24, length = 0.12, segment_length = 0.02, swatch_width = 0.04 }}
+[solver]
+dt = "1/240"
+gravity = [{}, {}, {}]
+[[stage]]
+kind = "settle"
+duration = 0.4
+[[export]]
+path = "rest.usda"
+what = "rest"
+[[export]]
+path = "final.usda"
+what = "final"
+[[export]]
+path = "state.usda"
+what = "state"
+{preview}
+"#,
+        gravity[0], gravity[1], gravity[2]
+    )
+}
+
+fn mean_difference(a: &Path, b: &Path) -> f64 {
+    let (wa, ha, pa) = decode(a);
+    let (wb, hb, pb) = decode(b);
+    assert_eq!((wa, ha), (wb, hb));
+    let total: u64 = pa
+        .iter()
+        .zip(&pb)
+        .map(|(&x, &y)| u64::from(x.abs_diff(y)))
+        .sum();
+    total as f64 / pa.len() as f64
+}
+
+#[test]
+fn timeline_preview_keeps_the_timelines_view_unless_told() {
+    let dir = TestDir::new();
+    let toml = swinging_timeline(
+        [4.0, -9.0, 0.0],
+        "[preview]\nsheet = \"sheet.png\"\nview = \"top\"\nsize = [96, 96]",
+    );
+    std::fs::write(dir.path("swing.toml"), toml).unwrap();
+    dir.run_ok(&[
+        "preview",
+        "swing.toml",
+        "-o",
+        "default.png",
+        "--size",
+        "96x96",
+    ]);
+    dir.run_ok(&[
+        "preview",
+        "swing.toml",
+        "-o",
+        "top.png",
+        "--size",
+        "96x96",
+        "--view",
+        "top",
+    ]);
+    dir.run_ok(&[
+        "preview",
+        "swing.toml",
+        "-o",
+        "front.png",
+        "--size",
+        "96x96",
+        "--view",
+        "front",
+    ]);
+    let read = |name: &str| std::fs::read(dir.path(name)).unwrap();
+    assert_eq!(
+        read("default.png"),
+        read("top.png"),
+        "[preview] view = top was not used"
+    );
+    assert_ne!(read("default.png"), read("front.png"));
+}
+
+#[test]
+fn timeline_preview_picks_the_view_that_shows_the_change() {
+    let dir = TestDir::new();
+    // Gravity tilted toward +Z: the swatch swings toward the camera of the
+    // front view, where nothing would be seen to change; the side view shows it.
+    let toml = swinging_timeline([0.0, -9.0, 5.0], "");
+    std::fs::write(dir.path("toward.toml"), toml).unwrap();
+    dir.run_ok(&[
+        "preview",
+        "toward.toml",
+        "-o",
+        "auto.png",
+        "--size",
+        "96x96",
+    ]);
+    dir.run_ok(&[
+        "preview",
+        "toward.toml",
+        "-o",
+        "side.png",
+        "--size",
+        "96x96",
+        "--view",
+        "side",
+    ]);
+    let read = |name: &str| std::fs::read(dir.path(name)).unwrap();
+    assert_eq!(
+        read("auto.png"),
+        read("side.png"),
+        "the swing toward +Z is seen from the side"
+    );
+    // Swinging toward +X: the front view.
+    let toml = swinging_timeline([5.0, -9.0, 0.0], "");
+    std::fs::write(dir.path("across.toml"), toml).unwrap();
+    dir.run_ok(&[
+        "preview",
+        "across.toml",
+        "-o",
+        "auto.png",
+        "--size",
+        "96x96",
+    ]);
+    dir.run_ok(&[
+        "preview",
+        "across.toml",
+        "-o",
+        "front.png",
+        "--size",
+        "96x96",
+        "--view",
+        "front",
+    ]);
+    assert_eq!(read("auto.png"), read("front.png"));
+}
+
+#[test]
+fn rest_draws_the_rest_shape_of_a_state_export_and_of_a_timeline() {
+    let dir = TestDir::new();
+    std::fs::write(
+        dir.path("swing.toml"),
+        swinging_timeline([6.0, -8.0, 0.0], ""),
+    )
+    .unwrap();
+    dir.run_ok(&["bake", "swing.toml", "-q"]);
+    let picture = |args: &[&str]| {
+        let mut all = vec!["preview"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--size", "128x128", "--view", "front"]);
+        dir.run_ok(&all);
+    };
+    picture(&["rest.usda", "-o", "rest.png"]);
+    picture(&["state.usda", "--rest", "-o", "state_rest.png"]);
+    picture(&["final.usda", "-o", "final.png"]);
+    let same = mean_difference(&dir.path("rest.png"), &dir.path("state_rest.png"));
+    let different = mean_difference(&dir.path("rest.png"), &dir.path("final.png"));
+    assert!(
+        same < 0.5,
+        "--rest of the state differs from the rest export by {same}"
+    );
+    assert!(
+        different > 2.0 * same.max(0.1),
+        "rest and final differ only by {different}"
+    );
+    // A timeline's --rest: one labelled picture of the same shape.
+    picture(&["swing.toml", "--rest", "-o", "timeline_rest.png"]);
+    assert!(dir.path("timeline_rest.png").exists());
+    // A file without simulation state has no rest shape to draw.
+    let e = dir.run_fail(&["preview", "final.usda", "--rest", "-o", "x.png"], 2);
+    assert!(e.contains("final.usda") && e.contains("state"), "{e}");
+}
+
+#[test]
+fn timeline_preview_draws_its_colliders() {
+    let dir = TestDir::new();
+    // A ball behind the middle of the swatch (which hangs from a bar at the
+    // origin down to y = -0.12), always active.
+    let toml = r#"seed = 1
+[groom]
+generate = { layout = "swatch", strands = 12, length = 0.12, segment_length = 0.02, swatch_width = 0.06 }
+[[collider]]
+name = "ball"
+shape = { ball = { radius = 0.025 } }
+motion = [{ t = 0.0, translation = [0.0, -0.06, -0.05] }]
+[[stage]]
+kind = "settle"
+duration = 0.05
+"#;
+    std::fs::write(dir.path("ball.toml"), toml).unwrap();
+    dir.run_ok(&[
+        "preview",
+        "ball.toml",
+        "-o",
+        "ball.png",
+        "--frame",
+        "0",
+        "--view",
+        "front",
+        "--size",
+        "160x160",
+    ]);
+    let (width, _, pixels) = decode(&dir.path("ball.png"));
+    // The collider's grey-blue: light and bluer than the (warm) hair and
+    // the (neutral) background.
+    let collider: Vec<usize> = pixels
+        .chunks_exact(3)
+        .enumerate()
+        .filter(|(_, p)| p[0] > 80 && i32::from(p[2]) > i32::from(p[0]) + 8)
+        .map(|(i, _)| i)
+        .collect();
+    assert!(
+        collider.len() > 200,
+        "only {} collider pixels in a {width} px wide picture",
+        collider.len()
+    );
 }

@@ -7,14 +7,14 @@
 //! `sample_points` (`[time code, point index, point]` items), plus
 //! `primvars` (name -> interpolation) and `widths` (interpolation).
 
-use crate::util::{hand_to_validators, shared_data, TestDir};
+use crate::util::{hand_to_validators, test_data, TestDir};
 use groom::{Attribute, AttributeValues, Frame, Groom, Units};
 use serde_json::json;
 
 /// Bangs_100 read straight from the `.hair` bytes (Cem Yuksel's layout),
 /// independently of the importers, as the reference the USD files must match.
 fn bangs() -> Groom {
-    let bytes = std::fs::read(shared_data("hairutil_Bangs_100.hair")).unwrap();
+    let bytes = std::fs::read(test_data("hairutil_Bangs_100.hair")).unwrap();
     let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     let (strands, points, flags) = (u32_at(4) as usize, u32_at(8) as usize, u32_at(12));
     let default_segments = u32_at(16);
@@ -60,7 +60,7 @@ fn bangs_to_usda_and_usdc_keeps_every_point() {
     let reference = bangs();
     assert_eq!(reference.strand_count(), 100);
     assert_eq!(reference.vertex_count(), 1165);
-    let source = shared_data("hairutil_Bangs_100.hair");
+    let source = test_data("hairutil_Bangs_100.hair");
     let source = source.to_str().unwrap();
     dir.run_ok(&["convert", source, "bangs.usda"]);
     dir.run_ok(&["convert", source, "bangs.usdc"]);
@@ -207,7 +207,7 @@ fn animated_usdc_has_one_time_sample_per_frame() {
 #[test]
 fn blender_usda_imports_every_curve_with_its_transform() {
     let dir = TestDir::new();
-    let source = shared_data("blender501_hair.usda");
+    let source = test_data("blender501_hair.usda");
     let source = source.to_str().unwrap();
     let summary = dir.inspect(source);
     assert_eq!(summary["format"], "usd");

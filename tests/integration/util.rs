@@ -1,5 +1,5 @@
-//! Test helpers: a temporary directory per test, the real binary, the shared
-//! sample data, and hand-off of exported files to the external validators
+//! Test helpers: a temporary directory per test, the real binary, the test
+//! data of `tests/data/`, and hand-off of exported files to the external validators
 //! that `.ci/run` runs (Khronos glTF-Validator, usd-core, alembic3d).
 
 #![allow(dead_code)]
@@ -71,20 +71,12 @@ impl TestDir {
     }
 }
 
-/// A file of `../shared/data/` (beside the repository, or beside one of its
-/// parent directories, as for a worktree).
-pub fn shared_data(name: &str) -> PathBuf {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = manifest
-        .ancestors()
-        .map(|dir| dir.join("shared/data").join(name))
-        .find(|p| p.exists());
-    path.unwrap_or_else(|| {
-        panic!(
-            "missing shared data file {name} beside {}",
-            manifest.display()
-        )
-    })
+/// A file of this repository's `tests/data/` (real grooms from other tools;
+/// `tests/data/README.md` names each one's source and licence).
+pub fn test_data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 /// A file of this repository's `samples/`.

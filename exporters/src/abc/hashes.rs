@@ -328,10 +328,10 @@ mod tests {
     }
 
     /// Digests stored by the Alembic library itself in
-    /// `shared/data/hairutil_Bangs_100.abc` (the 16 bytes before each sample).
+    /// `tests/data/hairutil_Bangs_100.abc` (the 16 bytes before each sample).
     #[test]
     fn murmur3_matches_alembic_sample_digests() {
-        let file = crate::abc::test_support::shared_data("hairutil_Bangs_100.abc");
+        let file = crate::abc::test_support::test_data("hairutil_Bangs_100.abc");
         // The P sample: a data block at offset 0x28 (size, digest, floats).
         let size = u64::from_le_bytes(file[0x28..0x30].try_into().unwrap()) as usize;
         let block = &file[0x30..0x30 + size];

@@ -31,13 +31,9 @@ mod tests {
     use groom::{Attribute, AttributeValues, CurveBasis, Frame, Scope, Units, UpAxis};
     use std::path::PathBuf;
 
-    fn shared_data(name: &str) -> PathBuf {
-        let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-        manifest
-            .ancestors()
-            .map(|dir| dir.join("shared/data").join(name))
-            .find(|p| p.exists())
-            .unwrap_or_else(|| panic!("missing shared data file {name}"))
+    /// A file of the workspace's `tests/data/`.
+    fn test_data(name: &str) -> PathBuf {
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data")).join(name)
     }
 
     struct TempDir(PathBuf);
@@ -84,8 +80,8 @@ mod tests {
 
     #[test]
     fn hairutil_bangs_matches_its_hair_file() {
-        let groom = read(&shared_data("hairutil_Bangs_100.abc")).unwrap();
-        let (counts, points) = hair_file(&shared_data("hairutil_Bangs_100.hair"));
+        let groom = read(&test_data("hairutil_Bangs_100.abc")).unwrap();
+        let (counts, points) = hair_file(&test_data("hairutil_Bangs_100.hair"));
         assert_eq!(groom.strand_count(), 100);
         assert_eq!(groom.vertex_count(), 1165);
         assert_eq!(groom.strand_vertex_counts, counts);
@@ -100,7 +96,7 @@ mod tests {
     /// first sample).
     #[test]
     fn blender_static_matches_the_alembic_library() {
-        let groom = read(&shared_data("blender501_hair_static.abc")).unwrap();
+        let groom = read(&test_data("blender501_hair_static.abc")).unwrap();
         assert_eq!(groom.strand_vertex_counts, vec![4, 4, 3, 4, 5]);
         let expected: Vec<[f32; 3]> = [
             (1.0, 0.0),
@@ -463,7 +459,7 @@ mod tests {
         for cut in 0..bytes.len() {
             assert_clean_error(path, &bytes[..cut]);
         }
-        let shared = std::fs::read(shared_data("blender501_hair_static.abc")).unwrap();
+        let shared = std::fs::read(test_data("blender501_hair_static.abc")).unwrap();
         for cut in 0..shared.len() {
             assert_clean_error(path, &shared[..cut]);
         }
@@ -487,7 +483,7 @@ mod tests {
             .collect();
         for bytes in [
             exported(&dir, "c.abc", &groom),
-            std::fs::read(shared_data("blender501_hair_static.abc")).unwrap(),
+            std::fs::read(test_data("blender501_hair_static.abc")).unwrap(),
         ] {
             for at in 0..bytes.len() {
                 for flip in [0xFFu8, 0x01, 0x80] {

@@ -8,10 +8,9 @@ fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn shared(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(name)
+/// A file of the workspace's `tests/data/` (real grooms from other tools).
+fn workspace_data(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data")).join(name)
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -30,7 +29,7 @@ fn values(groom: &Groom, name: &str) -> AttributeValues {
 
 #[test]
 fn blender_hair_usda() {
-    let groom = read(&shared("blender501_hair.usda")).unwrap();
+    let groom = read(&workspace_data("blender501_hair.usda")).unwrap();
     assert_eq!(groom.strand_vertex_counts, vec![3, 4, 5, 4, 4]);
     assert_eq!(groom.vertex_count(), 20);
     assert_eq!(groom.units, Units::METERS);
@@ -62,7 +61,7 @@ fn blender_hair_usda() {
 
 #[test]
 fn blender_hair_as_crate_reads_like_the_text() {
-    let text = read(&shared("blender501_hair.usda")).unwrap();
+    let text = read(&workspace_data("blender501_hair.usda")).unwrap();
     let mut binary = read(&data("blender501_hair_by_usd_core.usdc")).unwrap();
     binary.provenance.source = text.provenance.source.clone();
     assert_eq!(binary, text);

@@ -94,5 +94,5 @@ for ext in ("usdc", "usda"):
 
 # Blender's file as usd-core writes it in crate form (inlined vectors,
 # strings, dictionaries, token arrays).
-Sdf.Layer.FindOrOpen("../../../../shared/data/blender501_hair.usda").Export(
+Sdf.Layer.FindOrOpen("../../../tests/data/blender501_hair.usda").Export(
     "blender501_hair_by_usd_core.usdc")
