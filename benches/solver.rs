@@ -1,40 +1,73 @@
-//! Solver cost per vertex-iteration (the figure of issue 3): one step of
-//! 1,000 strands x 32 vertices, 5 iterations, hair-hair off, on 1 and 2
-//! threads. `groombake bench` measures the full 10,000-strand case.
+//! Solver cost per step (the workload of `groombake bench`): 1,000
+//! strands x 32 vertices, 5 iterations, on 1 and 2 threads, free, with
+//! hair-hair (alpha 5), with a ball head and with the mesh head
+//! (samples/head.obj). `groombake bench` measures 10,000 strands and more.
 
 // A benchmark harness: a failure to set up is a bug to see at once.
 #![allow(clippy::expect_used)]
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use groombake::sim::{
-    bench_groom, ColliderSet, Environment, Material, Solver, SolverParameters, StrandSet,
-};
+use groombake::bench::{HeadCollider, Workload};
 
 fn step(c: &mut Criterion) {
-    let groom = bench_groom(1_000, 32).expect("bench groom");
-    let parameters = SolverParameters::default();
+    let head = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
+    let plain = Workload {
+        strands: 1_000,
+        vertices: 32,
+        iterations: 5,
+        hair_hair: None,
+        collider: HeadCollider::None,
+    };
+    let cases = [
+        ("free", plain.clone()),
+        (
+            "hair_hair",
+            Workload {
+                hair_hair: Some(5.0),
+                ..plain.clone()
+            },
+        ),
+        (
+            "ball",
+            Workload {
+                collider: HeadCollider::Ball,
+                ..plain.clone()
+            },
+        ),
+        (
+            "mesh",
+            Workload {
+                collider: HeadCollider::Mesh(head.into()),
+                ..plain.clone()
+            },
+        ),
+        (
+            "mesh_hair_hair",
+            Workload {
+                hair_hair: Some(5.0),
+                collider: HeadCollider::Mesh(head.into()),
+                ..plain.clone()
+            },
+        ),
+    ];
     let mut group = c.benchmark_group("solver_step");
     group.throughput(Throughput::Elements(
-        (groom.points.len() * parameters.iterations as usize) as u64,
+        (plain.strands * plain.vertices) as u64,
     ));
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("thread pool");
-        let mut strands = StrandSet::from_groom(&groom, &Material::default()).expect("strands");
-        let mut solver = Solver::new(parameters).expect("solver");
-        let colliders = ColliderSet::new();
-        let environment = Environment::default();
-        group.bench_function(format!("1000x32_5it_{threads}threads"), |b| {
-            b.iter(|| {
-                pool.install(|| {
-                    solver
-                        .step(&mut strands, &colliders, &environment)
-                        .expect("step")
-                })
-            })
-        });
+        for (name, workload) in &cases {
+            let mut scene = workload.scene().expect("scene");
+            // Past the first fall, as `groombake bench` times it.
+            pool.install(|| (0..10).try_for_each(|_| scene.step()))
+                .expect("warm-up");
+            group.bench_function(format!("1000x32_5it_{name}_{threads}threads"), |b| {
+                b.iter(|| pool.install(|| scene.step().expect("step")))
+            });
+        }
     }
     group.finish();
 }

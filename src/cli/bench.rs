@@ -1,9 +1,10 @@
-//! `groombake bench`: times the solver on a generated groom.
+//! `groombake bench`: times the solver on a generated groom, optionally
+//! with hair-hair and a head collider, and shows each phase's share.
 
 use super::BadInput;
 use clap::Args;
-use groombake::sim::{self, ColliderSet, Environment, Material, Solver, SolverParameters};
-use std::time::Instant;
+use groombake::bench::{self, HeadCollider, Workload};
+use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -22,119 +23,133 @@ pub struct BenchArgs {
     /// Steps timed (after 10 untimed ones); by default enough for about 2 s.
     #[arg(long)]
     steps: Option<usize>,
-    /// Hair-hair penalty strength (off by default).
-    #[arg(long)]
+    /// Hair-hair penalty strength alpha of (20), 0-10 (off by default).
+    #[arg(long, value_name = "ALPHA")]
     hair_hair: Option<f32>,
+    /// Head collider: `ball` (radius 0.08 m) or `mesh FILE` (metres, Y up,
+    /// centred on the head, e.g. samples/head.obj).
+    #[arg(long, num_args = 1..=2, value_names = ["KIND", "FILE"])]
+    collider: Vec<String>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
 }
 
+fn collider_of(values: &[String]) -> Result<HeadCollider, BadInput> {
+    match values {
+        [] => Ok(HeadCollider::None),
+        [kind] if kind == "ball" => Ok(HeadCollider::Ball),
+        [kind, file] if kind == "mesh" => Ok(HeadCollider::Mesh(PathBuf::from(file))),
+        [kind] if kind == "mesh" => Err(BadInput("--collider mesh needs a FILE".into())),
+        _ => Err(BadInput(
+            "--collider must be `ball` or `mesh FILE`".to_string(),
+        )),
+    }
+}
+
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    if args.vertices < 2 || args.vertices > 10_001 {
-        return Err(BadInput("--vertices must be between 2 and 10001".into()).into());
-    }
-    if args.strands.saturating_mul(args.vertices) > 50_000_000 {
-        return Err(BadInput("--strands x --vertices must be at most 50,000,000".into()).into());
-    }
     if args.threads == Some(0) {
         return Err(BadInput("--threads must be at least 1".into()).into());
     }
-    let groom = sim::bench_groom(args.strands, args.vertices)?;
-    let parameters = SolverParameters {
+    if let Some(alpha) = args.hair_hair {
+        if !(alpha.is_finite() && (0.0..=10.0).contains(&alpha)) {
+            return Err(BadInput("--hair-hair must be in [0, 10]".into()).into());
+        }
+    }
+    let workload = Workload {
+        strands: args.strands,
+        vertices: args.vertices,
         iterations: args.iterations,
-        hair_hair_strength: args.hair_hair,
-        ..SolverParameters::default()
+        hair_hair: args.hair_hair,
+        collider: collider_of(&args.collider)?,
     };
-    let mut solver = Solver::new(parameters).map_err(|e| BadInput(e.to_string()))?;
-    let mut strands = sim::StrandSet::from_groom(&groom, &Material::default())?;
+    workload.check().map_err(|e| BadInput(e.to_string()))?;
+    if let HeadCollider::Mesh(path) = &workload.collider {
+        // Read before any stepping, so a bad file fails at once.
+        importers::mesh::read_triangles(path)?;
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(threads) = args.threads {
         builder = builder.num_threads(threads);
     }
     let pool = builder.build()?;
     let threads = pool.current_num_threads();
-    let colliders = ColliderSet::new();
-    let environment = Environment::default();
-    let vertex_iterations = (strands.vertex_count() as f64) * f64::from(args.iterations);
-    let (steps, seconds, cpu_ns) =
-        pool.install(|| -> anyhow::Result<(usize, f64, Option<u64>)> {
-            let mut step = |solver: &mut Solver| -> anyhow::Result<()> {
-                let report = solver.step(&mut strands, &colliders, &environment)?;
-                if !report.contained.is_empty() {
-                    anyhow::bail!("{} strands turned non-finite", report.contained.len());
-                }
-                Ok(())
-            };
-            for _ in 0..10 {
-                step(&mut solver)?;
-            }
-            let steps = match args.steps {
-                Some(steps) => steps.max(1),
-                None => {
-                    let start = Instant::now();
-                    step(&mut solver)?;
-                    let one = start.elapsed().as_secs_f64().max(1e-6);
-                    ((2.0 / one) as usize).clamp(3, 10_000)
-                }
-            };
-            let cpu_start = process_cpu_ns();
-            let start = Instant::now();
-            for _ in 0..steps {
-                step(&mut solver)?;
-            }
-            let seconds = start.elapsed().as_secs_f64();
-            let cpu = match (cpu_start, process_cpu_ns()) {
-                (Some(a), Some(b)) => Some(b.saturating_sub(a)),
-                _ => None,
-            };
-            Ok((steps, seconds, cpu))
-        })?;
-    let ns = seconds * 1e9 / (steps as f64 * vertex_iterations);
-    // CPU time of all threads: on a busy machine the wall clock overstates
-    // the cost; this does not.
-    let cpu_ns = cpu_ns.map(|cpu| cpu as f64 / (steps as f64 * vertex_iterations));
-    let ms_per_step = seconds * 1e3 / steps as f64;
+    let report = pool.install(|| bench::run(&workload, args.steps, 2.0, threads))?;
+    let shares = report.shares;
+    let load = load_average();
     if args.json {
-        let report = serde_json::json!({
-            "strands": args.strands,
-            "vertices": args.vertices,
+        let json = serde_json::json!({
+            "strands": workload.strands,
+            "vertices": workload.vertices,
             "threads": threads,
-            "iterations": args.iterations,
-            "hair_hair": args.hair_hair,
-            "steps": steps,
-            "seconds": seconds,
-            "ms_per_step": ms_per_step,
-            "ns_per_vertex_iteration": ns,
-            "cpu_ns_per_vertex_iteration": cpu_ns,
+            "iterations": workload.iterations,
+            "hair_hair": workload.hair_hair,
+            "collider": match &workload.collider {
+                HeadCollider::None => None,
+                HeadCollider::Ball => Some("ball".to_string()),
+                HeadCollider::Mesh(p) => Some(format!("mesh {}", p.display())),
+            },
+            "steps": report.timing.steps,
+            "seconds": report.timing.seconds,
+            "ms_per_step": report.timing.seconds * 1e3 / report.timing.steps as f64,
+            "ns_per_vertex_step": report.ns_per_vertex_step(),
+            "ns_per_vertex_iteration": report.ns_per_vertex_iteration(),
+            "cpu_ns_per_vertex_step": report.cpu_ns_per_vertex_step(),
+            "cpu_ns_per_vertex_iteration": report
+                .cpu_ns_per_vertex_step()
+                .map(|c| c / f64::from(workload.iterations)),
+            "shares": {
+                "solver": shares.solver,
+                "collisions": shares.collisions,
+                "hair_hair": shares.hair_hair,
+                "interpolation": shares.interpolation,
+                "export": shares.export,
+            },
+            "peak_memory_bytes": report.peak_memory,
+            "load_average": load,
         });
-        println!("{report}");
+        println!("{json}");
     } else {
         println!(
             "{} strands x {} vertices, {} iterations, {} threads: {} steps in {:.3} s, \
-             {:.2} ms per step, {:.2} ns per vertex-iteration ({} ns of CPU time)",
-            args.strands,
-            args.vertices,
-            args.iterations,
+             {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per vertex-iteration \
+             ({} ns of CPU time per vertex-step)",
+            workload.strands,
+            workload.vertices,
+            workload.iterations,
             threads,
-            steps,
-            seconds,
-            ms_per_step,
-            ns,
-            cpu_ns.map_or("?".to_string(), |c| format!("{c:.2}"))
+            report.timing.steps,
+            report.timing.seconds,
+            report.timing.seconds * 1e3 / report.timing.steps as f64,
+            report.ns_per_vertex_step(),
+            report.ns_per_vertex_iteration(),
+            report
+                .cpu_ns_per_vertex_step()
+                .map_or("?".to_string(), |c| format!("{c:.2}"))
+        );
+        let share = |s: Option<f64>| s.map_or("-".to_string(), |s| format!("{:.1} %", s * 100.0));
+        println!(
+            "shares of CPU time (by ablation): solver (forces, constraints, bonds) {}, \
+             collisions {}, hair-hair {}, interpolation {}, export {}",
+            share(Some(shares.solver)),
+            share(shares.collisions),
+            share(shares.hair_hair),
+            share(shares.interpolation),
+            share(shares.export)
+        );
+        println!(
+            "peak memory {}, load average {}",
+            report
+                .peak_memory
+                .map_or("?".to_string(), |b| format!("{:.0} MB", b as f64 / 1e6)),
+            load.map_or("?".to_string(), |l| format!("{l:.2}"))
         );
     }
     Ok(())
 }
 
-/// CPU time of every thread of this process so far, in nanoseconds (Linux
-/// `/proc/self/task/*/schedstat`); `None` elsewhere.
-fn process_cpu_ns() -> Option<u64> {
-    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
-    let mut total = 0u64;
-    for task in tasks.flatten() {
-        let text = std::fs::read_to_string(task.path().join("schedstat")).ok()?;
-        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
-    }
-    Some(total)
+/// The one-minute load average (Linux), to judge the timing by.
+fn load_average() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    text.split_whitespace().next()?.parse().ok()
 }

@@ -1,10 +1,17 @@
 //! Colliders: parry3d shapes with kinematic poses and Coulomb friction.
 //! A vertex is projected to outside the shape plus the hair radius.
+//! A triangle mesh answers through its distance grid ([`sdf`]), built
+//! once when the collider is made; its motion moves the queries.
+
+mod sdf;
 
 use super::math::{add, cross, dot, length, scale, sub, V3};
 use super::Pose;
 use parry3d::math::Vector;
+use parry3d::query::PointProjection;
 use parry3d::shape::SharedShape;
+use sdf::{MeshSdf, Query};
+use std::sync::Arc;
 
 /// One kinematic collider.
 #[derive(Clone)]
@@ -20,6 +27,9 @@ pub struct Collider {
     pub linear_velocity: [f32; 3],
     /// Angular velocity about the pose's origin, rad/s.
     pub angular_velocity: [f32; 3],
+    /// A mesh shape's distance grid, and the shape it was built for (a
+    /// replaced `shape` is queried directly).
+    grid: Option<(Arc<MeshSdf>, SharedShape)>,
 }
 
 impl std::fmt::Debug for Collider {
@@ -34,7 +44,12 @@ impl std::fmt::Debug for Collider {
 }
 
 impl Collider {
+    /// A mesh shape gets its distance grid here, once.
     pub fn new(name: impl Into<String>, shape: SharedShape, pose: Pose, friction: f32) -> Collider {
+        let grid = shape
+            .as_trimesh()
+            .and_then(MeshSdf::new)
+            .map(|sdf| (Arc::new(sdf), shape.clone()));
         Collider {
             name: name.into(),
             shape,
@@ -42,6 +57,15 @@ impl Collider {
             friction,
             linear_velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
+            grid,
+        }
+    }
+
+    /// The grid, if it was built for the current shape.
+    fn mesh_grid(&self) -> Option<&MeshSdf> {
+        match &self.grid {
+            Some((sdf, built_for)) if Arc::ptr_eq(&built_for.0, &self.shape.0) => Some(sdf),
+            _ => None,
         }
     }
 
@@ -95,15 +119,22 @@ impl ColliderSet {
         self.colliders.is_empty()
     }
 
-    /// Per-step data: world boxes grown by the hair radius.
-    pub(crate) fn prepare(&self, radius: f32) -> Vec<PreparedCollider<'_>> {
+    /// Per-step data: world boxes grown by the hair radius (inline, no
+    /// allocation for up to eight colliders).
+    pub(crate) fn prepare(&self, radius: f32) -> Prepared<'_> {
         self.colliders
             .iter()
             .map(|c| {
                 let aabb = c.shape.compute_aabb(&c.pose);
                 let grow = radius * 1.01;
+                let surface = match c.mesh_grid() {
+                    Some(sdf) if radius <= sdf.max_radius => Surface::Grid(sdf),
+                    Some(sdf) => Surface::Mesh(sdf),
+                    None => Surface::Shape,
+                };
                 PreparedCollider {
                     collider: c,
+                    surface,
                     min: [aabb.mins.x - grow, aabb.mins.y - grow, aabb.mins.z - grow],
                     max: [aabb.maxs.x + grow, aabb.maxs.y + grow, aabb.maxs.z + grow],
                     center: [
@@ -117,11 +148,57 @@ impl ColliderSet {
     }
 }
 
+/// The colliders of one step (derefs to a slice).
+pub(crate) type Prepared<'a> = smallvec::SmallVec<[PreparedCollider<'a>; 8]>;
+
+/// How a collider's surface is found.
+#[derive(Clone, Copy)]
+enum Surface<'a> {
+    /// parry's query on the shape.
+    Shape,
+    /// A mesh's distance grid.
+    Grid(&'a MeshSdf),
+    /// A mesh too fine for the hair radius: parry's query on the grid's
+    /// (oriented) mesh.
+    Mesh(&'a MeshSdf),
+}
+
 pub(crate) struct PreparedCollider<'a> {
     collider: &'a Collider,
+    surface: Surface<'a>,
     min: V3,
     max: V3,
     center: V3,
+}
+
+impl PreparedCollider<'_> {
+    /// The closest surface point (world), or `None` when `p` is outside
+    /// and farther than `radius`.
+    #[inline]
+    fn closest(&self, p: V3, radius: f32) -> Option<PointProjection> {
+        let pose = &self.collider.pose;
+        let world = Vector::new(p[0], p[1], p[2]);
+        let in_mesh_frame = |sdf: &MeshSdf, local: Vector| {
+            let mut projection = sdf.exact(local);
+            projection.point = pose.transform_point(projection.point);
+            projection
+        };
+        match self.surface {
+            Surface::Shape => Some(self.collider.shape.project_point(pose, world, false)),
+            Surface::Mesh(sdf) => Some(in_mesh_frame(sdf, pose.inverse_transform_point(world))),
+            Surface::Grid(sdf) => {
+                let local = pose.inverse_transform_point(world);
+                match sdf.query(local, radius) {
+                    Query::Clear => None,
+                    Query::Surface(mut projection) => {
+                        projection.point = pose.transform_point(projection.point);
+                        Some(projection)
+                    }
+                    Query::Exact => Some(in_mesh_frame(sdf, local)),
+                }
+            }
+        }
+    }
 }
 
 /// Pushes `p` out of every collider to at least `radius` from its surface.
@@ -145,10 +222,9 @@ pub(crate) fn project(
         {
             continue;
         }
-        let projection =
-            c.collider
-                .shape
-                .project_point(&c.collider.pose, Vector::new(p[0], p[1], p[2]), false);
+        let Some(projection) = c.closest(p, radius) else {
+            continue;
+        };
         let surface = [projection.point.x, projection.point.y, projection.point.z];
         let offset = sub(p, surface);
         let distance = length(offset);
@@ -248,5 +324,60 @@ mod tests {
             0.01,
         );
         assert!((p[0] - 0.008).abs() < 1e-6, "{p:?}");
+    }
+
+    #[test]
+    fn a_moving_mesh_head_leaves_every_vertex_a_radius_outside() {
+        use parry3d::query::PointQuery;
+        use parry3d::shape::{TriMesh, TriMeshFlags};
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
+        let (vertices, triangles) =
+            importers::mesh::read_triangles(std::path::Path::new(path)).expect("head");
+        let vertices: Vec<Vector> = vertices
+            .iter()
+            .map(|v| Vector::new(v[0], v[1], v[2]))
+            .collect();
+        let exact =
+            TriMesh::with_flags(vertices.clone(), triangles.clone(), TriMeshFlags::ORIENTED)
+                .expect("mesh");
+        let mut set = ColliderSet::new();
+        set.insert(Collider::new(
+            "head",
+            SharedShape::trimesh(vertices, triangles).expect("mesh"),
+            Pose::from_translation(Vector::new(0.0, 1.5, 0.0)),
+            0.0,
+        ));
+        // Turned and moved, as a keyframed head is.
+        let pose = Pose::from_parts(
+            Vector::new(0.1, 1.6, -0.05),
+            parry3d::math::Rot3::from_axis_angle(Vector::new(0.3, 1.0, 0.2).normalize(), 0.7),
+        );
+        set.colliders[0].move_to(pose, 0.01);
+        let radius = 4e-5;
+        let prepared = set.prepare(radius);
+        assert!(matches!(prepared[0].surface, Surface::Grid(_)));
+        let mut seed = 3u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        let mut pushed = 0;
+        for _ in 0..5_000 {
+            let dir = Vector::new(next(), next(), next()).normalize();
+            let on = exact.project_local_point(dir * 0.2, false).point;
+            let local = on * (1.0 + 0.02 * next());
+            let world = pose.transform_point(local);
+            let p = [world.x, world.y, world.z];
+            let q = project(&prepared, p, None, radius, 0.01);
+            let back = pose.inverse_transform_point(Vector::new(q[0], q[1], q[2]));
+            let after = exact.project_local_point(back, false);
+            let distance = (back - after.point).length();
+            assert!(
+                !after.is_inside && distance >= 0.99 * radius,
+                "{p:?} -> {q:?}: {distance}"
+            );
+            pushed += usize::from(q != p);
+        }
+        assert!(pushed > 1000, "{pushed}");
     }
 }

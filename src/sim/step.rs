@@ -360,11 +360,8 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             ctx.linear_keep,
         );
         v = math::add(v, blower_dv_here);
-        if let Some((alpha, grid, snapshot)) = ctx.hair_hair {
-            v = math::add(
-                v,
-                grid.penalty_dv(snapshot, x, s.index, ctx.radius, alpha, dt),
-            );
+        if let Some((alpha, grid, _)) = ctx.hair_hair {
+            v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
         }
         work.p[i] = math::add(x, math::scale(v, dt));
     }
