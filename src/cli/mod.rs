@@ -4,6 +4,7 @@
 mod bake;
 mod bench;
 mod convert;
+mod diff;
 mod generate;
 mod inspect;
 mod preview;
@@ -38,6 +39,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Draws a groom (or a sheet of its frames) to a PNG picture.
     Preview(preview::PreviewArgs),
+    /// Compares two grooms within a tolerance (exit 0 equal, 1 different).
+    Diff(diff::DiffArgs),
 }
 
 /// Bad input or usage: exit code 2.
@@ -67,6 +70,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Validate(a) => bake::run_validate(a),
         Command::Bench(a) => bench::run(a),
         Command::Preview(a) => preview::run(a),
+        Command::Diff(a) => diff::run(a),
     }
 }
 

@@ -10,6 +10,7 @@ mod alembic;
 mod bake;
 mod bench;
 mod cli;
+mod diff;
 mod formats;
 mod golden;
 mod inspect;
