@@ -2,6 +2,7 @@
 //! Each subcommand only composes library functions.
 
 mod bake;
+mod batch;
 mod bench;
 mod convert;
 mod diff;
@@ -39,6 +40,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Draws a groom (or a sheet of its frames) to a PNG picture.
     Preview(preview::PreviewArgs),
+    /// Bakes the jobs of a manifest (in parallel, a shard, resumed) or emits a farm script.
+    Batch(batch::BatchArgs),
     /// Compares two grooms within a tolerance (exit 0 equal, 1 different).
     Diff(diff::DiffArgs),
 }
@@ -71,6 +74,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a),
         Command::Preview(a) => preview::run(a),
         Command::Diff(a) => diff::run(a),
+        Command::Batch(a) => batch::run(a),
     }
 }
 

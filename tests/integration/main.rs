@@ -8,6 +8,7 @@ mod util;
 
 mod alembic;
 mod bake;
+mod batch;
 mod bench;
 mod cli;
 mod diff;
