@@ -560,9 +560,9 @@ set -euo pipefail
 exe={exe}
 manifest={manifest_arg}
 if [ "$SLURM_ARRAY_TASK_ID" = "0" ]; then
-  sbatch --parsable --job-name=groombake-merge --dependency="afterany:$SLURM_ARRAY_JOB_ID" \
+  echo "merge job: $(sbatch --parsable --job-name=groombake-merge --dependency="afterany:$SLURM_ARRAY_JOB_ID" \
     --output={logs}/groombake-merge-%j.log \
-    --wrap="$(printf '%q ' "$exe" batch "$manifest" --merge)"
+    --wrap="$(printf '%q ' "$exe" batch "$manifest" --merge)")"
 fi
 exec "$exe" batch "$manifest" --threads {threads} \
   --shard "$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT"
