@@ -370,8 +370,7 @@ fn bake_job(
         out_dir: job.folder.clone(),
         threads,
         seed: None,
-        progress: false,
-        dry: false,
+        ..BakeOptions::default()
     };
     let report = bake(&timeline, &options).map_err(|e| e.to_string())?.report;
     let outputs = report

@@ -68,6 +68,12 @@ impl Timeline {
             column: 0,
             message: format!("cannot read the timeline: {e}"),
         })?;
+        Timeline::from_text(path, text)
+    }
+
+    /// Parses and checks a timeline's text; `path` names it in errors and
+    /// its folder resolves relative paths.
+    pub fn from_text(path: &Path, text: String) -> Result<Timeline, TimelineError> {
         let file: TimelineFile = toml::from_str(&text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             error_at(path, &text, span, e.message().trim().to_string())
