@@ -3,6 +3,8 @@
 //! these.
 
 pub mod bench;
+pub mod batch;
+pub mod diff;
 pub mod generate;
 pub mod preview;
 pub mod sim;

@@ -55,6 +55,7 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         seed: args.seed,
         progress: !args.quiet && std::io::stderr().is_terminal(),
         dry: false,
+        monitor: None,
     };
     let report = bake(&timeline, &options).map_err(classify)?.report;
     if let Some(path) = &args.report {

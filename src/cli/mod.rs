@@ -2,8 +2,10 @@
 //! Each subcommand only composes library functions.
 
 mod bake;
+mod batch;
 mod bench;
 mod convert;
+mod diff;
 mod generate;
 mod inspect;
 mod install;
@@ -43,6 +45,10 @@ enum Command {
     Completions(install::CompletionsArgs),
     /// Prints the man page (roff): `groombake man > groombake.1`.
     Man,
+    /// Bakes the jobs of a manifest (in parallel, a shard, resumed) or emits a farm script.
+    Batch(batch::BatchArgs),
+    /// Compares two grooms within a tolerance (exit 0 equal, 1 different).
+    Diff(diff::DiffArgs),
 }
 
 /// Bad input or usage: exit code 2.
@@ -74,6 +80,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Preview(a) => preview::run(a),
         Command::Completions(a) => install::run_completions(a),
         Command::Man => install::run_man(),
+        Command::Diff(a) => diff::run(a),
+        Command::Batch(a) => batch::run(a),
     }
 }
 

@@ -156,6 +156,7 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
     let timeline = Timeline::load(&args.file).map_err(|e| BadInput(e.to_string()))?;
     let options = BakeOptions {
         dry: true,
+        monitor: None,
         ..BakeOptions::default()
     };
     let outcome = bake(&timeline, &options).map_err(super::bake::classify)?;

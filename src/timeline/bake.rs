@@ -13,6 +13,7 @@ use crate::sim::{
 use groom::{Frame, Groom, Units, UpAxis};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// How to run a bake.
@@ -29,6 +30,20 @@ pub struct BakeOptions {
     /// Run without writing the timeline's exports and sheet (a preview of
     /// the timeline keeps only the snapshots).
     pub dry: bool,
+    /// Progress and cancellation shared with another thread (the Python
+    /// module polls it while the GIL is released).
+    pub monitor: Option<std::sync::Arc<BakeMonitor>>,
+}
+
+/// The steps a running bake has done, and a request to stop it.
+#[derive(Debug, Default)]
+pub struct BakeMonitor {
+    pub steps_done: std::sync::atomic::AtomicU64,
+    /// Known once the bake is prepared (0 before).
+    pub steps_total: std::sync::atomic::AtomicU64,
+    /// Set to stop the bake after its current step ([`BakeError::Cancelled`]);
+    /// no output is left half-written.
+    pub cancel: std::sync::atomic::AtomicBool,
 }
 
 /// What a bake leaves besides its files: the report and the groom before
@@ -63,6 +78,8 @@ pub enum BakeError {
     Threads(String),
     #[error(transparent)]
     Preview(#[from] crate::preview::PreviewError),
+    #[error("the bake was interrupted")]
+    Cancelled,
 }
 
 impl BakeError {
@@ -459,6 +476,9 @@ fn bake_in_pool(
         .collect();
     let total_steps: u64 = stage_steps.iter().sum();
     let total_time = total_steps as f64 * dt;
+    if let Some(monitor) = &options.monitor {
+        monitor.steps_total.store(total_steps, Ordering::Relaxed);
+    }
 
     // Open the animated exports and write frame 0.
     let mut animated = Vec::new();
@@ -637,6 +657,12 @@ fn bake_in_pool(
                 stage_report.contained_strands.extend(step_report.contained);
             }
             step_index += 1;
+            if let Some(monitor) = &options.monitor {
+                monitor.steps_done.store(step_index, Ordering::Relaxed);
+                if monitor.cancel.load(Ordering::Relaxed) {
+                    return Err(BakeError::Cancelled);
+                }
+            }
             write_frames(&mut animated, &strands, step_index)?;
             stage_bar.inc(1);
             overall.inc(1);

@@ -567,7 +567,8 @@ fn check_drive(
     Ok(())
 }
 
-fn error_at(
+/// An error at a byte span of a TOML text (a manifest's too).
+pub fn error_at(
     path: &Path,
     text: &str,
     span: Range<usize>,

@@ -8,8 +8,10 @@ mod util;
 
 mod alembic;
 mod bake;
+mod batch;
 mod bench;
 mod cli;
+mod diff;
 mod formats;
 mod golden;
 mod inspect;

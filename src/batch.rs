@@ -1,0 +1,573 @@
+//! Batches of bakes (`groombake batch MANIFEST.toml`): a manifest lists
+//! jobs, each a timeline with optionally another groom and output folder.
+//! Every job bakes into its own folder and leaves a job report there
+//! ([`JOB_REPORT`]); the batch merges them into one report ([`MERGED_REPORT`]).
+//!
+//! A job report is written last and atomically, so a job whose report is
+//! present with the hashes of the files on disk is complete: `resume`
+//! skips it. A failing job (bad input, a failed bake, a panic) is recorded
+//! as failed and the others go on. Shards (`I/N`: jobs `I, I+N, ...`) let
+//! a farm's array tasks split the jobs; a final `merge` gathers them.
+
+use crate::timeline::bake::{bake, BakeOptions};
+use crate::timeline::report::size_and_sha256;
+use crate::timeline::{Timeline, TimelineError};
+use serde::{Deserialize, Serialize};
+use serde_spanned::Spanned;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// The report every job leaves in its folder.
+pub const JOB_REPORT: &str = "groombake_job.json";
+/// The merged report in the batch's output folder.
+pub const MERGED_REPORT: &str = "batch_report.json";
+
+/// The manifest as written (TOML); paths are relative to its folder.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ManifestFile {
+    /// Folder the jobs' folders go under (default `batch_out`).
+    out: Option<String>,
+    /// Worker threads of each bake (default: the cores shared by the jobs).
+    threads: Option<usize>,
+    #[serde(default, rename = "job")]
+    jobs: Vec<Spanned<JobSpec>>,
+    #[serde(default, rename = "glob")]
+    globs: Vec<Spanned<GlobSpec>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JobSpec {
+    /// Name of the job and of its folder (default: from the file names).
+    name: Option<String>,
+    timeline: String,
+    /// A groom file baked instead of the timeline's `[groom]` source.
+    groom: Option<String>,
+    /// The job's folder, instead of `<out>/<name>`.
+    out: Option<String>,
+}
+
+/// One job per groom file matching `grooms`, each with `timeline`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GlobSpec {
+    timeline: String,
+    grooms: String,
+}
+
+/// One job of a manifest, its paths resolved.
+#[derive(Debug, Clone)]
+pub struct Job {
+    pub name: String,
+    pub timeline: PathBuf,
+    pub groom: Option<PathBuf>,
+    pub folder: PathBuf,
+}
+
+/// A read manifest: its jobs in order.
+#[derive(Debug)]
+pub struct Manifest {
+    pub path: PathBuf,
+    /// The folder the merged report goes to.
+    pub out: PathBuf,
+    pub threads: Option<usize>,
+    pub jobs: Vec<Job>,
+}
+
+/// What went wrong with a manifest (bad input: exit code 2).
+pub type ManifestError = TimelineError;
+
+/// An output of a job: its path (relative to the job's folder where it
+/// lies inside it), size and SHA-256.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct JobOutput {
+    pub path: String,
+    pub bytes: u64,
+    pub sha256: String,
+}
+
+/// How a job ended.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum JobStatus {
+    /// Baked now.
+    Ok,
+    /// Complete from an earlier run (`resume`): outputs match the report.
+    Skipped,
+    Failed,
+    /// No report found (a merge of shards that did not all run).
+    Missing,
+}
+
+/// The report of one job (also the entry of the merged report).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct JobReport {
+    pub name: String,
+    pub timeline: String,
+    pub groom: Option<String>,
+    pub folder: String,
+    pub status: JobStatus,
+    pub error: Option<String>,
+    pub wall_seconds: f64,
+    pub outputs: Vec<JobOutput>,
+    /// The bake's own report (`bake --report`), when it ran.
+    pub bake: Option<serde_json::Value>,
+}
+
+/// The merged report of a batch.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct BatchReport {
+    pub manifest: String,
+    pub groombake_version: String,
+    pub jobs: Vec<JobReport>,
+    pub succeeded: usize,
+    pub failed: usize,
+    pub missing: usize,
+    pub wall_seconds: f64,
+}
+
+impl BatchReport {
+    pub fn all_succeeded(&self) -> bool {
+        self.failed == 0 && self.missing == 0
+    }
+}
+
+/// How to run a batch.
+#[derive(Debug, Clone, Default)]
+pub struct BatchOptions {
+    /// Jobs run at once (at least 1).
+    pub parallel: usize,
+    /// `(index, count)`: run only jobs `index, index + count, ...`.
+    pub shard: Option<(usize, usize)>,
+    /// Skip jobs whose outputs match their report.
+    pub resume: bool,
+    /// Worker threads of each bake (overrides the manifest's).
+    pub threads: Option<usize>,
+}
+
+fn manifest_error(
+    path: &Path,
+    text: &str,
+    span: std::ops::Range<usize>,
+    message: String,
+) -> ManifestError {
+    crate::timeline::error_at(path, text, span, message)
+}
+
+/// The file name part of a path, for job names.
+fn stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// A job name is a folder name: letters, digits, `-`, `_` and `.`.
+fn check_name(name: &str) -> Result<(), String> {
+    let ok = !name.is_empty()
+        && name != "."
+        && name != ".."
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "job name '{name}': use letters, digits, '-', '_' and '.' only"
+        ))
+    }
+}
+
+impl Manifest {
+    /// Reads a manifest and expands its globs; every job's timeline and
+    /// groom must exist and names must be unique.
+    pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            manifest_error(path, "", 0..0, format!("cannot read the manifest: {e}"))
+        })?;
+        let file: ManifestFile = toml::from_str(&text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            manifest_error(path, &text, span, e.message().trim().to_string())
+        })?;
+        let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        let out = base.join(file.out.as_deref().unwrap_or("batch_out"));
+        let fail = |span: std::ops::Range<usize>, message: String| {
+            manifest_error(path, &text, span, message)
+        };
+        if file.threads == Some(0) {
+            return Err(fail(0..0, "threads must be at least 1".into()));
+        }
+        let mut jobs: Vec<(Job, std::ops::Range<usize>)> = Vec::new();
+        for spec in &file.jobs {
+            let span = spec.span();
+            let spec = spec.get_ref();
+            let timeline = base.join(&spec.timeline);
+            let groom = spec.groom.as_ref().map(|g| base.join(g));
+            let name = spec.name.clone().unwrap_or_else(|| match &groom {
+                Some(g) => format!("{}-{}", stem(&timeline), stem(g)),
+                None => stem(&timeline),
+            });
+            let folder = match &spec.out {
+                Some(o) => base.join(o),
+                None => out.join(&name),
+            };
+            jobs.push((
+                Job {
+                    name,
+                    timeline,
+                    groom,
+                    folder,
+                },
+                span,
+            ));
+        }
+        for spec in &file.globs {
+            let span = spec.span();
+            let spec = spec.get_ref();
+            let timeline = base.join(&spec.timeline);
+            let pattern = base.join(&spec.grooms);
+            let matches = glob::glob(&pattern.to_string_lossy())
+                .map_err(|e| fail(span.clone(), format!("grooms: {e}")))?;
+            let mut grooms: Vec<PathBuf> = matches.filter_map(Result::ok).collect();
+            grooms.sort();
+            if grooms.is_empty() {
+                return Err(fail(
+                    span,
+                    format!("grooms: no file matches '{}'", pattern.display()),
+                ));
+            }
+            for g in grooms {
+                let name = format!("{}-{}", stem(&timeline), stem(&g));
+                let folder = out.join(&name);
+                jobs.push((
+                    Job {
+                        name,
+                        timeline: timeline.clone(),
+                        groom: Some(g),
+                        folder,
+                    },
+                    span.clone(),
+                ));
+            }
+        }
+        if jobs.is_empty() {
+            return Err(fail(
+                0..0,
+                "the manifest lists no [[job]] or [[glob]]".into(),
+            ));
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for (job, span) in &jobs {
+            check_name(&job.name).map_err(|m| fail(span.clone(), m))?;
+            if !seen.insert(job.folder.clone()) {
+                return Err(fail(
+                    span.clone(),
+                    format!("two jobs write to the folder '{}'", job.folder.display()),
+                ));
+            }
+            if !job.timeline.is_file() {
+                return Err(fail(
+                    span.clone(),
+                    format!("timeline '{}' not found", job.timeline.display()),
+                ));
+            }
+            if let Some(g) = job.groom.as_ref().filter(|g| !g.is_file()) {
+                return Err(fail(
+                    span.clone(),
+                    format!("groom '{}' not found", g.display()),
+                ));
+            }
+        }
+        Ok(Manifest {
+            path: path.to_path_buf(),
+            out,
+            threads: file.threads,
+            jobs: jobs.into_iter().map(|(job, _)| job).collect(),
+        })
+    }
+
+    /// Indices of the jobs of a shard `(index, count)` (all without one).
+    pub fn shard(&self, shard: Option<(usize, usize)>) -> Vec<usize> {
+        let (index, count) = shard.unwrap_or((0, 1));
+        (0..self.jobs.len())
+            .filter(|i| i % count.max(1) == index)
+            .collect()
+    }
+}
+
+/// Parses `I/N` (0 <= I < N).
+pub fn parse_shard(text: &str) -> Result<(usize, usize), String> {
+    let parsed = text
+        .split_once('/')
+        .and_then(|(i, n)| Some((i.trim().parse().ok()?, n.trim().parse().ok()?)));
+    match parsed {
+        Some((i, n)) if n > 0 && i < n => Ok((i, n)),
+        _ => Err(format!("shard '{text}': expected I/N with 0 <= I < N")),
+    }
+}
+
+fn job_report_path(job: &Job) -> PathBuf {
+    job.folder.join(JOB_REPORT)
+}
+
+/// The job's report on disk, if readable.
+fn read_job_report(job: &Job) -> Option<JobReport> {
+    let text = std::fs::read(job_report_path(job)).ok()?;
+    serde_json::from_slice(&text).ok()
+}
+
+/// The path of an output, relative to the job's folder where it lies inside.
+fn output_path(job: &Job, relative: &str) -> PathBuf {
+    let p = Path::new(relative);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        job.folder.join(p)
+    }
+}
+
+/// A report of a complete earlier run whose outputs are all on disk with
+/// the same hashes.
+fn completed_earlier(job: &Job) -> Option<JobReport> {
+    let report = read_job_report(job)?;
+    if !matches!(report.status, JobStatus::Ok | JobStatus::Skipped) {
+        return None;
+    }
+    let intact = report.outputs.iter().all(|o| {
+        size_and_sha256(&output_path(job, &o.path))
+            .is_ok_and(|(bytes, sha)| bytes == o.bytes && sha == o.sha256)
+    });
+    intact.then_some(report)
+}
+
+fn write_json(path: &Path, value: &impl Serialize) -> std::io::Result<()> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    let mut file = groom::AtomicFile::create(path)?;
+    serde_json::to_writer_pretty(&mut file, value)?;
+    std::io::Write::write_all(&mut file, b"\n")?;
+    file.commit()
+}
+
+/// Loads the job's timeline with its groom override and bakes it into the
+/// job's folder; returns the bake's report as JSON and the outputs.
+fn bake_job(
+    job: &Job,
+    threads: Option<usize>,
+) -> Result<(serde_json::Value, Vec<JobOutput>), String> {
+    let mut timeline = Timeline::load(&job.timeline).map_err(|e| e.to_string())?;
+    if let Some(groom) = &job.groom {
+        let absolute =
+            std::path::absolute(groom).map_err(|e| format!("{}: {e}", groom.display()))?;
+        timeline.file.groom.source = Some(Spanned::new(0..0, absolute.display().to_string()));
+        timeline.file.groom.generate = None;
+    }
+    let options = BakeOptions {
+        out_dir: job.folder.clone(),
+        threads,
+        seed: None,
+        ..BakeOptions::default()
+    };
+    let report = bake(&timeline, &options).map_err(|e| e.to_string())?.report;
+    let outputs = report
+        .outputs
+        .iter()
+        .map(|o| {
+            let path = Path::new(&o.path);
+            let shown = path.strip_prefix(&job.folder).unwrap_or(path);
+            JobOutput {
+                path: shown.display().to_string(),
+                bytes: o.bytes,
+                sha256: o.sha256.clone(),
+            }
+        })
+        .collect();
+    let value = serde_json::to_value(&report).map_err(|e| e.to_string())?;
+    Ok((value, outputs))
+}
+
+/// Removes the temporary files (`.NAME.PID.tmp`, see [`groom::AtomicFile`])
+/// that a killed run of the job left in its folder: nothing else writes
+/// there while the job runs.
+fn remove_leftovers(folder: &Path) {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if path.is_dir() {
+            remove_leftovers(&path);
+        } else if name.starts_with('.') && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
+/// Runs one job (or finds it complete) and writes its report.
+pub fn run_job(job: &Job, options: &BatchOptions, threads: Option<usize>) -> JobReport {
+    if options.resume {
+        if let Some(mut report) = completed_earlier(job) {
+            report.status = JobStatus::Skipped;
+            return report;
+        }
+    }
+    let started = Instant::now();
+    // An old report must not vouch for outputs this run may leave half done.
+    let _ = std::fs::remove_file(job_report_path(job));
+    remove_leftovers(&job.folder);
+    let outcome = std::fs::create_dir_all(&job.folder)
+        .map_err(|e| format!("{}: {e}", job.folder.display()))
+        .and_then(|()| {
+            // A panic in one bake must not end the others.
+            std::panic::catch_unwind(|| bake_job(job, threads))
+                .unwrap_or_else(|_| Err("the bake panicked".into()))
+        });
+    let (status, error, bake, outputs) = match outcome {
+        Ok((bake, outputs)) => (JobStatus::Ok, None, Some(bake), outputs),
+        Err(message) => (JobStatus::Failed, Some(message), None, Vec::new()),
+    };
+    let mut report = JobReport {
+        name: job.name.clone(),
+        timeline: job.timeline.display().to_string(),
+        groom: job.groom.as_ref().map(|g| g.display().to_string()),
+        folder: job.folder.display().to_string(),
+        status,
+        error,
+        wall_seconds: started.elapsed().as_secs_f64(),
+        outputs,
+        bake,
+    };
+    if let Err(e) = write_json(&job_report_path(job), &report) {
+        report.status = JobStatus::Failed;
+        report.error = Some(format!("{}: {e}", job_report_path(job).display()));
+    }
+    report
+}
+
+/// Runs the jobs of the options' shard, `parallel` at a time, calling
+/// `finished` as each ends. Returns their reports in manifest order.
+pub fn run(
+    manifest: &Manifest,
+    options: &BatchOptions,
+    finished: &(dyn Fn(&JobReport) + Sync),
+) -> Vec<JobReport> {
+    let selected = manifest.shard(options.shard);
+    let parallel = options.parallel.clamp(1, selected.len().max(1));
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // Outputs are identical for any thread count; this only shares cores.
+    let threads = options
+        .threads
+        .or(manifest.threads)
+        .unwrap_or((cores / parallel).max(1));
+    let next = AtomicUsize::new(0);
+    let reports: Mutex<Vec<Option<JobReport>>> = Mutex::new(vec![None; selected.len()]);
+    std::thread::scope(|scope| {
+        for _ in 0..parallel {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(&index) = selected.get(k) else { break };
+                let report = run_job(&manifest.jobs[index], options, Some(threads));
+                finished(&report);
+                if let Ok(mut slots) = reports.lock() {
+                    slots[k] = Some(report);
+                }
+            });
+        }
+    });
+    reports
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// The merged report of every job of the manifest: the reports of this
+/// run (`fresh`), else those on disk (a job without one is `missing`).
+pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> BatchReport {
+    let jobs: Vec<JobReport> = manifest
+        .jobs
+        .iter()
+        .map(|job| {
+            let folder = job.folder.display().to_string();
+            let this_run = fresh.iter().find(|r| r.folder == folder).cloned();
+            this_run
+                .or_else(|| read_job_report(job))
+                .unwrap_or_else(|| JobReport {
+                    name: job.name.clone(),
+                    timeline: job.timeline.display().to_string(),
+                    groom: job.groom.as_ref().map(|g| g.display().to_string()),
+                    folder: job.folder.display().to_string(),
+                    status: JobStatus::Missing,
+                    error: Some("no job report".into()),
+                    wall_seconds: 0.0,
+                    outputs: Vec::new(),
+                    bake: None,
+                })
+        })
+        .collect();
+    let count = |s: JobStatus| jobs.iter().filter(|j| j.status == s).count();
+    BatchReport {
+        manifest: manifest.path.display().to_string(),
+        groombake_version: env!("CARGO_PKG_VERSION").to_string(),
+        succeeded: count(JobStatus::Ok) + count(JobStatus::Skipped),
+        failed: count(JobStatus::Failed),
+        missing: count(JobStatus::Missing),
+        jobs,
+        wall_seconds,
+    }
+}
+
+/// Writes the merged report (JSON) into the manifest's output folder.
+pub fn write_merged(manifest: &Manifest, report: &BatchReport) -> std::io::Result<PathBuf> {
+    let path = manifest.out.join(MERGED_REPORT);
+    write_json(&path, report)?;
+    Ok(path)
+}
+
+/// Quotes a word for a POSIX shell.
+fn shell_quote(text: &str) -> String {
+    format!("'{}'", text.replace('\'', r"'\''"))
+}
+
+/// A Slurm job-array script: task `i` of `K + 1` runs shard `i/K+1` of the
+/// manifest; task 0 also submits the merge, which waits for the whole array.
+/// `sbatch` it as it is.
+pub fn slurm_script(manifest: &Manifest, executable: &Path, threads: usize) -> String {
+    let exe = shell_quote(&executable.display().to_string());
+    let path = std::path::absolute(&manifest.path).unwrap_or_else(|_| manifest.path.clone());
+    let out = std::path::absolute(&manifest.out).unwrap_or_else(|_| manifest.out.clone());
+    let manifest_arg = shell_quote(&path.display().to_string());
+    let logs = shell_quote(&out.join("slurm").display().to_string());
+    let last = manifest.jobs.len().saturating_sub(1);
+    format!(
+        r#"#!/bin/bash
+# groombake batch of {manifest}: {jobs} job(s) as a Slurm job array.
+# Submit with `sbatch THIS_FILE`; task 0 submits the merge of the reports,
+# which runs when every task has ended.
+#SBATCH --job-name=groombake
+#SBATCH --array=0-{last}
+#SBATCH --ntasks=1
+#SBATCH --cpus-per-task={threads}
+#SBATCH --output={log_dir}/groombake-%A_%a.log
+set -euo pipefail
+exe={exe}
+manifest={manifest_arg}
+if [ "$SLURM_ARRAY_TASK_ID" = "0" ]; then
+  echo "merge job: $(sbatch --parsable --job-name=groombake-merge --dependency="afterany:$SLURM_ARRAY_JOB_ID" \
+    --output={logs}/groombake-merge-%j.log \
+    --wrap="$(printf '%q ' "$exe" batch "$manifest" --merge)")"
+fi
+exec "$exe" batch "$manifest" --threads {threads} \
+  --shard "$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT"
+"#,
+        manifest = path.display(),
+        jobs = manifest.jobs.len(),
+        log_dir = out.join("slurm").display(),
+    )
+}
