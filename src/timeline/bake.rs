@@ -398,7 +398,11 @@ fn progress_bars(
     (multi, overall, stage)
 }
 
-/// Runs the timeline and writes its exports.
+/// Runs the timeline and writes its exports, in three phases like a
+/// physics pipeline's step: [`BakeRun::prepare`] (everything checked and
+/// every output opened before the first step), [`BakeRun::run_stages`]
+/// (the simulation, streaming animated frames) and [`BakeRun::write`] (the
+/// final, rest, state and sheet outputs and the report's lines).
 pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, BakeError> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(threads) = options.threads {
@@ -407,84 +411,156 @@ pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, B
     let pool = builder
         .build()
         .map_err(|e| BakeError::Threads(e.to_string()))?;
-    pool.install(|| bake_in_pool(timeline, options, pool.current_num_threads()))
+    pool.install(|| {
+        let mut run = BakeRun::prepare(timeline, options, pool.current_num_threads())?;
+        run.run_stages()?;
+        run.write()
+    })
 }
 
-fn bake_in_pool(
-    timeline: &Timeline,
-    options: &BakeOptions,
-    threads: usize,
-) -> Result<BakeOutcome, BakeError> {
-    let started = Instant::now();
-    let Prepared {
-        groom,
-        mut strands,
-        colliders,
-        parameters,
-        seed,
-    } = prepare(timeline, options.seed)?;
-    let dt = timeline.dt;
-    let plans: Vec<StagePlan> = timeline
-        .file
-        .stages
-        .get_ref()
-        .iter()
-        .map(StagePlan::new)
-        .collect();
-    let stage_steps: Vec<u64> = plans
-        .iter()
-        .map(|p| ((p.duration / dt).round() as u64).max(1))
-        .collect();
-    let total_steps: u64 = stage_steps.iter().sum();
-    let total_time = total_steps as f64 * dt;
+/// A bake under way: the prepared state, the open animated exports, the
+/// snapshots and the report so far.
+struct BakeRun<'a> {
+    timeline: &'a Timeline,
+    options: &'a BakeOptions,
+    started: Instant,
+    groom: Groom,
+    strands: StrandSet,
+    colliders: ColliderSet,
+    parameters: SolverParameters,
+    seed: u64,
+    dt: f64,
+    plans: Vec<StagePlan>,
+    stage_steps: Vec<u64>,
+    total_time: f64,
+    /// The exports this run writes (none for a dry run).
+    exports: &'a [super::schema::ExportSpec],
+    animated: Vec<AnimatedExport>,
+    /// Steps done over all stages.
+    step_index: u64,
+    snapshots: Vec<(String, Groom)>,
+    report: BakeReport,
+}
 
-    // Open the animated exports and write frame 0.
-    let mut animated = Vec::new();
-    // A dry run (a preview of the timeline) writes no file.
-    let exports: &[super::schema::ExportSpec] = if options.dry {
-        &[]
-    } else {
-        &timeline.file.exports
-    };
-    for (index, e) in exports.iter().enumerate() {
-        if e.what != ExportWhat::Animated {
-            continue;
-        }
-        let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
-        let frame_count = (total_time * fps + 1e-6).floor() as usize + 1;
-        let (units, up) = export_units(timeline, index);
-        let mut base = groom_now(&groom, &strands, strands.positions().to_vec(), false);
-        base.convert_to(units, up);
-        let path = output_path(options, e.path.get_ref());
-        create_parent(&path)?;
-        let writer = exporters::animated(
-            &path,
-            &base,
-            exporters::AnimationOptions { fps, frame_count },
-        )?;
-        animated.push(AnimatedExport {
-            index,
-            writer,
-            fps,
-            frames_written: 0,
-            frame_count,
-            units,
-            up,
-        });
+/// What one stage runs with: its solver and colliders, rods and wind.
+struct StageRun<'p> {
+    plan: &'p StagePlan,
+    solver: Solver,
+    colliders: ColliderSet,
+    motions: Vec<&'p [super::schema::KeySpec]>,
+    rods: Option<PermRods>,
+    wind: Option<WindPlan>,
+    unrolled: bool,
+}
+
+impl<'a> BakeRun<'a> {
+    /// Phase 1: prepares the strands and colliders, plans the stages, opens
+    /// the animated exports and writes their frame 0.
+    fn prepare(
+        timeline: &'a Timeline,
+        options: &'a BakeOptions,
+        threads: usize,
+    ) -> Result<BakeRun<'a>, BakeError> {
+        let started = Instant::now();
+        let Prepared {
+            groom,
+            strands,
+            colliders,
+            parameters,
+            seed,
+        } = prepare(timeline, options.seed)?;
+        let dt = timeline.dt;
+        let plans: Vec<StagePlan> = timeline
+            .file
+            .stages
+            .get_ref()
+            .iter()
+            .map(StagePlan::new)
+            .collect();
+        let stage_steps: Vec<u64> = plans.iter().map(|p| steps_of(p.duration, dt)).collect();
+        let total_steps: u64 = stage_steps.iter().sum();
+        let report = BakeReport {
+            timeline: timeline.path.display().to_string(),
+            groombake_version: env!("CARGO_PKG_VERSION").to_string(),
+            seed,
+            threads,
+            strands: strands.strand_count(),
+            vertices: strands.vertex_count(),
+            ..BakeReport::default()
+        };
+        // A dry run (a preview of the timeline) writes no file.
+        let exports: &[super::schema::ExportSpec] = if options.dry {
+            &[]
+        } else {
+            &timeline.file.exports
+        };
+        let mut run = BakeRun {
+            timeline,
+            options,
+            started,
+            groom,
+            strands,
+            colliders,
+            parameters,
+            seed,
+            dt,
+            plans,
+            stage_steps,
+            total_time: total_steps as f64 * dt,
+            exports,
+            animated: Vec::new(),
+            step_index: 0,
+            snapshots: Vec::new(),
+            report,
+        };
+        run.open_animated()?;
+        run.write_due_frames()?;
+        run.snapshot("before".to_string());
+        Ok(run)
     }
-    let write_frames = |animated: &mut Vec<AnimatedExport>,
-                        strands: &StrandSet,
-                        step: u64|
-     -> Result<(), BakeError> {
-        for a in animated.iter_mut() {
-            // Frame k belongs to the step nearest k / fps.
+
+    /// Opens every animated export with the groom as it starts.
+    fn open_animated(&mut self) -> Result<(), BakeError> {
+        for (index, e) in self.exports.iter().enumerate() {
+            if e.what != ExportWhat::Animated {
+                continue;
+            }
+            let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
+            let frame_count = (self.total_time * fps + 1e-6).floor() as usize + 1;
+            let (units, up) = export_units(self.timeline, index);
+            let mut base = self.groom_now(false);
+            base.convert_to(units, up);
+            let path = output_path(self.options, e.path.get_ref());
+            create_parent(&path)?;
+            let writer = exporters::animated(
+                &path,
+                &base,
+                exporters::AnimationOptions { fps, frame_count },
+            )?;
+            self.animated.push(AnimatedExport {
+                index,
+                writer,
+                fps,
+                frames_written: 0,
+                frame_count,
+                units,
+                up,
+            });
+        }
+        Ok(())
+    }
+
+    /// Writes the animated frames due by the current step: frame k belongs
+    /// to the step nearest k / fps.
+    fn write_due_frames(&mut self) -> Result<(), BakeError> {
+        for a in self.animated.iter_mut() {
             while a.frames_written < a.frame_count {
                 let k = a.frames_written;
-                let due = ((k as f64 / a.fps) / dt).round() as u64;
-                if due > step {
+                let due = ((k as f64 / a.fps) / self.dt).round() as u64;
+                if due > self.step_index {
                     break;
                 }
-                let mut points = strands.positions().to_vec();
+                let mut points = self.strands.positions().to_vec();
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let frame = Frame {
                     time: k as f64 / a.fps,
@@ -495,27 +571,58 @@ fn bake_in_pool(
             }
         }
         Ok(())
-    };
-    write_frames(&mut animated, &strands, 0)?;
-    let mut snapshots = vec![(
-        "before".to_string(),
-        groom_now(&groom, &strands, strands.positions().to_vec(), false),
-    )];
+    }
 
-    let (_multi, overall, stage_bar) = progress_bars(options, total_steps);
-    let mut report = BakeReport {
-        timeline: timeline.path.display().to_string(),
-        groombake_version: env!("CARGO_PKG_VERSION").to_string(),
-        seed,
-        threads,
-        strands: strands.strand_count(),
-        vertices: strands.vertex_count(),
-        ..BakeReport::default()
-    };
-    let mut step_index: u64 = 0;
-    let mut global_time = 0.0f64;
-    for (stage_index, (plan, &steps)) in plans.iter().zip(&stage_steps).enumerate() {
+    /// The groom as it is now (see [`groom_now`]).
+    fn groom_now(&self, with_state: bool) -> Groom {
+        groom_now(
+            &self.groom,
+            &self.strands,
+            self.strands.positions().to_vec(),
+            with_state,
+        )
+    }
+
+    fn snapshot(&mut self, label: String) {
+        let groom = self.groom_now(false);
+        self.snapshots.push((label, groom));
+    }
+
+    /// Phase 2: runs every stage in order.
+    fn run_stages(&mut self) -> Result<(), BakeError> {
+        let total_steps: u64 = self.stage_steps.iter().sum();
+        let (_multi, overall, stage_bar) = progress_bars(self.options, total_steps);
+        let mut global_time = 0.0f64;
+        for stage_index in 0..self.plans.len() {
+            let stage_report = self.run_stage(stage_index, global_time, &overall, &stage_bar)?;
+            global_time += stage_report.steps as f64 * self.dt;
+            self.report.warnings.extend(
+                stage_report
+                    .warnings
+                    .iter()
+                    .map(|w| format!("stage {stage_index}: {w}")),
+            );
+            self.report.stages.push(stage_report);
+        }
+        stage_bar.finish_and_clear();
+        overall.finish_and_clear();
+        Ok(())
+    }
+
+    /// Runs one stage from `global_time` and reports it.
+    fn run_stage(
+        &mut self,
+        stage_index: usize,
+        global_time: f64,
+        overall: &ProgressBar,
+        stage_bar: &ProgressBar,
+    ) -> Result<StageReport, BakeError> {
+        let timeline = self.timeline;
         let spec = &timeline.file.stages.get_ref()[stage_index];
+        // A copy, so the stage can borrow it while the run changes.
+        let plan = &self.plans[stage_index].clone();
+        let steps = self.stage_steps[stage_index];
+        let dt = self.dt;
         let stage_started = Instant::now();
         let name = spec
             .name
@@ -532,101 +639,22 @@ fn bake_in_pool(
             steps,
             ..StageReport::default()
         };
-        let active: Vec<bool> = timeline
-            .file
-            .colliders
-            .iter()
-            .map(|c| {
-                c.active == ColliderActivity::Always
-                    || spec
-                        .colliders
-                        .iter()
-                        .any(|n| n.get_ref() == c.name.get_ref())
-            })
-            .collect();
-        let mut stage_parameters = parameters;
-        if let Some(d) = &spec.damping {
-            stage_parameters.linear_damping = d.linear;
-            stage_parameters.angular_damping = d.angular;
-        }
-        let mut solver = Solver::new(stage_parameters)?;
-        // The colliders of this stage, where their motion has them now.
-        let mut stage_colliders = ColliderSet::new();
-        let mut stage_motions = Vec::new();
-        for ((collider, spec), &on) in colliders
-            .colliders
-            .iter()
-            .zip(&timeline.file.colliders)
-            .zip(&active)
-        {
-            if on {
-                let keys = spec.motion.get_ref().as_slice();
-                let mut collider = collider.clone();
-                collider.set_pose(pose_of(pose_at(keys, global_time)));
-                stage_colliders.insert(collider);
-                stage_motions.push(keys);
-            }
-        }
-        if plan.release_targets {
-            strands.clear_kinematic_targets();
-        }
-        let rods = plan
-            .perm
-            .as_ref()
-            .map(|p| PermRods::new(&strands, p, parameters.hair_radius));
-        let mut wind = match (plan.kind, &plan.wind) {
-            (StageKind::Wind, Some(spec)) => Some(WindPlan::new(&strands, spec.clone(), seed)),
-            _ => None,
-        };
-        let mut unrolled = false;
+        let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
-            // The scalp and the kinematic colliders take their pose at the
-            // end of the step; colliders also the velocity that gets them
-            // there (friction drags hair along).
-            if !timeline.file.groom.motion.get_ref().is_empty() {
-                strands.set_root_transform(&pose_of(pose_at(
-                    timeline.file.groom.motion.get_ref(),
-                    t_end,
-                )));
-            }
-            for (collider, keys) in stage_colliders.colliders.iter_mut().zip(&stage_motions) {
-                collider.move_to(pose_of(pose_at(keys, t_end)), dt as f32);
-            }
-            if let (Some(rods), Some(perm)) = (&rods, &plan.perm) {
-                if t_local < perm.set_end {
-                    rods.wind(&mut strands, ((t_local + dt) / perm.roll_end).min(1.0))?;
-                } else if !unrolled {
-                    rods.unroll(&mut strands)?;
-                    unrolled = true;
-                }
-            }
-            let (environment, wetness) = plan.environment_at(t_local);
-            if let Some((target, rate)) = wetness {
-                drive_wetness(&mut strands, target, rate, dt as f32);
-            }
-            if let Some(wind) = wind.as_mut() {
-                if wind.advance_to(t_local + dt) {
-                    wind.apply(&mut strands);
-                }
-            } else {
-                let step_report = solver.step(&mut strands, &stage_colliders, &environment)?;
-                stage_report.contained_strands.extend(step_report.contained);
-            }
-            step_index += 1;
-            write_frames(&mut animated, &strands, step_index)?;
+            let contained = self.advance(&mut stage, t_local, t_end)?;
+            stage_report.contained_strands.extend(contained);
+            self.step_index += 1;
+            self.write_due_frames()?;
             stage_bar.inc(1);
             overall.inc(1);
         }
-        if wind.is_some() {
-            strands = with_frames_from_positions(&groom, &strands, &material_of(timeline))?;
+        if stage.wind.is_some() {
+            self.strands =
+                with_frames_from_positions(&self.groom, &self.strands, &material_of(timeline))?;
         }
-        global_time += steps as f64 * dt;
-        snapshots.push((
-            format!("after {}", stage_report.name),
-            groom_now(&groom, &strands, strands.positions().to_vec(), false),
-        ));
+        self.snapshot(format!("after {}", stage_report.name));
         if !stage_report.contained_strands.is_empty() {
             stage_report.warnings.push(format!(
                 "{} strand(s) turned non-finite and were frozen: {:?}",
@@ -635,54 +663,162 @@ fn bake_in_pool(
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();
-        report.warnings.extend(
-            stage_report
-                .warnings
-                .iter()
-                .map(|w| format!("stage {stage_index}: {w}")),
-        );
-        report.stages.push(stage_report);
+        Ok(stage_report)
     }
-    stage_bar.finish_and_clear();
-    overall.finish_and_clear();
 
-    // Finish the animated exports, then write the static ones.
-    let mut frames_of = vec![None; exports.len()];
-    for a in animated {
-        frames_of[a.index] = Some(a.frames_written);
-        a.writer.finish()?;
-    }
-    for (index, e) in exports.iter().enumerate() {
-        let path = output_path(options, e.path.get_ref());
-        if e.what != ExportWhat::Animated {
-            let (units, up) = export_units(timeline, index);
-            let mut out = match e.what {
-                ExportWhat::Final => {
-                    groom_now(&groom, &strands, strands.positions().to_vec(), false)
-                }
-                ExportWhat::Rest => groom_now(&groom, &strands, strands.rest_pose(), false),
-                ExportWhat::State => {
-                    groom_now(&groom, &strands, strands.positions().to_vec(), true)
-                }
-                ExportWhat::Animated => continue,
-            };
-            out.convert_to(units, up);
-            create_parent(&path)?;
-            exporters::write(&path, &out)?;
+    /// Sets a stage up: its active colliders where their motion has them
+    /// at `global_time`, its solver, rods and wind.
+    fn start_stage<'p>(
+        &mut self,
+        spec: &super::schema::StageSpec,
+        plan: &'p StagePlan,
+        global_time: f64,
+    ) -> Result<StageRun<'p>, BakeError>
+    where
+        'a: 'p,
+    {
+        let timeline = self.timeline;
+        let mut stage_parameters = self.parameters;
+        if let Some(d) = &spec.damping {
+            stage_parameters.linear_damping = d.linear;
+            stage_parameters.angular_damping = d.angular;
         }
-        let what = format!("{:?}", e.what).to_lowercase();
-        report
-            .outputs
-            .push(output_report(&path, what, frames_of[index])?);
+        let solver = Solver::new(stage_parameters)?;
+        let mut colliders = ColliderSet::new();
+        let mut motions = Vec::new();
+        for (collider, collider_spec) in self
+            .colliders
+            .colliders
+            .iter()
+            .zip(&timeline.file.colliders)
+        {
+            let on = collider_spec.active == ColliderActivity::Always
+                || spec
+                    .colliders
+                    .iter()
+                    .any(|n| n.get_ref() == collider_spec.name.get_ref());
+            if on {
+                let keys = collider_spec.motion.get_ref().as_slice();
+                let mut collider = collider.clone();
+                collider.set_pose(pose_of(pose_at(keys, global_time)));
+                colliders.insert(collider);
+                motions.push(keys);
+            }
+        }
+        if plan.release_targets {
+            self.strands.clear_kinematic_targets();
+        }
+        let rods = plan
+            .perm
+            .as_ref()
+            .map(|p| PermRods::new(&self.strands, p, self.parameters.hair_radius));
+        let wind = match (plan.kind, &plan.wind) {
+            (StageKind::Wind, Some(wind)) => {
+                Some(WindPlan::new(&self.strands, wind.clone(), self.seed))
+            }
+            _ => None,
+        };
+        Ok(StageRun {
+            plan,
+            solver,
+            colliders,
+            motions,
+            rods,
+            wind,
+            unrolled: false,
+        })
     }
-    if let (Some(preview), false) = (&timeline.file.preview, options.dry) {
-        let path = output_path(options, preview.sheet.get_ref());
-        write_sheet(timeline, &snapshots, &path)?;
-        report
-            .outputs
-            .push(output_report(&path, "sheet".into(), None)?);
+
+    /// One step of a stage at stage time `t_local` (ending at global time
+    /// `t_end`); returns the strands contained in it.
+    fn advance(
+        &mut self,
+        stage: &mut StageRun<'_>,
+        t_local: f64,
+        t_end: f64,
+    ) -> Result<Vec<usize>, BakeError> {
+        let dt = self.dt;
+        let strands = &mut self.strands;
+        let plan = stage.plan;
+        // The scalp and the kinematic colliders take their pose at the
+        // end of the step; colliders also the velocity that gets them
+        // there (friction drags hair along).
+        let scalp = self.timeline.file.groom.motion.get_ref();
+        if !scalp.is_empty() {
+            strands.set_root_transform(&pose_of(pose_at(scalp, t_end)));
+        }
+        for (collider, keys) in stage.colliders.colliders.iter_mut().zip(&stage.motions) {
+            collider.move_to(pose_of(pose_at(keys, t_end)), dt as f32);
+        }
+        if let (Some(rods), Some(perm)) = (&stage.rods, &plan.perm) {
+            if t_local < perm.set_end {
+                rods.wind(strands, ((t_local + dt) / perm.roll_end).min(1.0))?;
+            } else if !stage.unrolled {
+                rods.unroll(strands)?;
+                stage.unrolled = true;
+            }
+        }
+        let (environment, wetness) = plan.environment_at(t_local);
+        if let Some((target, rate)) = wetness {
+            drive_wetness(strands, target, rate, dt as f32);
+        }
+        if let Some(wind) = stage.wind.as_mut() {
+            if wind.advance_to(t_local + dt) {
+                wind.apply(strands);
+            }
+            Ok(Vec::new())
+        } else {
+            let step_report = stage.solver.step(strands, &stage.colliders, &environment)?;
+            Ok(step_report.contained)
+        }
     }
-    report.simulated_seconds = total_time;
-    report.wall_seconds = started.elapsed().as_secs_f64();
-    Ok(BakeOutcome { report, snapshots })
+
+    /// Phase 3: finishes the animated exports, writes the static ones and
+    /// the sheet, and completes the report.
+    fn write(mut self) -> Result<BakeOutcome, BakeError> {
+        let mut frames_of = vec![None; self.exports.len()];
+        for a in std::mem::take(&mut self.animated) {
+            frames_of[a.index] = Some(a.frames_written);
+            a.writer.finish()?;
+        }
+        for (index, e) in self.exports.iter().enumerate() {
+            let path = output_path(self.options, e.path.get_ref());
+            if e.what != ExportWhat::Animated {
+                let (units, up) = export_units(self.timeline, index);
+                let mut out = match e.what {
+                    ExportWhat::Final => self.groom_now(false),
+                    ExportWhat::Rest => {
+                        groom_now(&self.groom, &self.strands, self.strands.rest_pose(), false)
+                    }
+                    ExportWhat::State => self.groom_now(true),
+                    ExportWhat::Animated => continue,
+                };
+                out.convert_to(units, up);
+                create_parent(&path)?;
+                exporters::write(&path, &out)?;
+            }
+            let what = format!("{:?}", e.what).to_lowercase();
+            self.report
+                .outputs
+                .push(output_report(&path, what, frames_of[index])?);
+        }
+        if let (Some(preview), false) = (&self.timeline.file.preview, self.options.dry) {
+            let path = output_path(self.options, preview.sheet.get_ref());
+            write_sheet(self.timeline, &self.snapshots, &path)?;
+            self.report
+                .outputs
+                .push(output_report(&path, "sheet".into(), None)?);
+        }
+        self.report.simulated_seconds = self.total_time;
+        self.report.wall_seconds = self.started.elapsed().as_secs_f64();
+        Ok(BakeOutcome {
+            report: self.report,
+            snapshots: self.snapshots,
+        })
+    }
+}
+
+/// Steps of a stage of `duration` seconds at `dt` (at least one).
+fn steps_of(duration: f64, dt: f64) -> u64 {
+    ((duration / dt).round() as u64).max(1)
 }
