@@ -2,6 +2,7 @@
 //! of treatments and previews. The command line in `main.rs` only composes
 //! these.
 
+pub mod budget;
 pub mod generate;
 pub mod preview;
 pub mod sim;

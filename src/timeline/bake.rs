@@ -3,6 +3,7 @@
 //! and state exports, and reports.
 
 use super::motion::{pose_at, Pose as KeyPose};
+use super::outputs::{self, Staging};
 use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport};
 use super::schema::{ColliderActivity, ExportWhat, ShapeSpec, StageKind};
 use super::stages::{drive_wetness, PermRods, StagePlan, WindPlan};
@@ -13,6 +14,8 @@ use crate::sim::{
 use groom::{Frame, Groom, Units, UpAxis};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How to run a bake.
@@ -29,6 +32,22 @@ pub struct BakeOptions {
     /// Run without writing the timeline's exports and sheet (a preview of
     /// the timeline keeps only the snapshots).
     pub dry: bool,
+    /// Where the caller will write the report: checked with the outputs,
+    /// and the old one removed before the outputs are renamed into place.
+    pub report: Option<PathBuf>,
+    /// Set to a signal's number (by a signal handler) to stop the bake; it
+    /// stops at the next step and removes its temporaries.
+    pub interrupt: Option<Arc<AtomicUsize>>,
+}
+
+impl BakeOptions {
+    /// The signal that asked the bake to stop, if one did.
+    fn interrupted(&self) -> Result<(), BakeError> {
+        match self.interrupt.as_ref().map(|i| i.load(Ordering::Relaxed)) {
+            Some(signal) if signal != 0 => Err(BakeError::Interrupted { signal }),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// What a bake leaves besides its files: the report and the groom before
@@ -59,6 +78,12 @@ pub enum BakeError {
     },
     #[error("thread pool: {0}")]
     Threads(String),
+    /// An output or report path that cannot be written or names the same
+    /// file as another.
+    #[error("{}: {message}", file.display())]
+    Output { file: PathBuf, message: String },
+    #[error("stopped by signal {signal}; temporaries removed, no output replaced")]
+    Interrupted { signal: usize },
     #[error(transparent)]
     Preview(#[from] crate::preview::PreviewError),
 }
@@ -68,7 +93,10 @@ impl BakeError {
     pub fn is_bad_input(&self) -> bool {
         matches!(
             self,
-            BakeError::Timeline(_) | BakeError::Import(_) | BakeError::Input { .. }
+            BakeError::Timeline(_)
+                | BakeError::Import(_)
+                | BakeError::Input { .. }
+                | BakeError::Output { .. }
         )
     }
 }
@@ -148,6 +176,17 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
                 .into())
         }
     };
+    if groom.strand_count() == 0 {
+        let file = match &spec.source {
+            Some(source) => timeline.resolve(source.get_ref()),
+            None => timeline.path.clone(),
+        };
+        return Err(BakeError::Input {
+            file,
+            message: "the groom has no strands".into(),
+        });
+    }
+    timeline.check_budget(groom.points.len() as u64)?;
     groom.convert_to(Units::METERS, UpAxis::Y);
     groom.frames.clear();
     if spec.translate != [0.0; 3] {
@@ -225,6 +264,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     }
     let parameters = parameters_of(timeline);
     parameters.check()?;
+    check_preview_color(timeline, &groom)?;
     Ok(Prepared {
         groom,
         strands,
@@ -232,6 +272,91 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         parameters,
         seed: seed_override.or(timeline.file.seed).unwrap_or(0),
     })
+}
+
+/// Refuses a `[preview] color` that names no attribute of the snapshots
+/// (the groom's own, the bond rates and wetness).
+fn check_preview_color(timeline: &Timeline, groom: &Groom) -> Result<(), TimelineError> {
+    let Some(color) = timeline
+        .file
+        .preview
+        .as_ref()
+        .and_then(|p| p.color.as_ref())
+    else {
+        return Ok(());
+    };
+    let name = color.get_ref().as_str();
+    let mut names: Vec<&str> = groom.attributes.iter().map(|a| a.name.as_str()).collect();
+    names.extend(attribute_names::BOND_RATES);
+    names.push(attribute_names::WETNESS);
+    if names.contains(&name) {
+        return Ok(());
+    }
+    names.sort_unstable();
+    names.dedup();
+    Err(timeline.error_at(
+        color.span(),
+        format!(
+            "no attribute {:?} to colour by (there are: {})",
+            name.escape_debug().to_string(),
+            names.join(", ")
+        ),
+    ))
+}
+
+/// The final paths of the bake's outputs (exports, then the sheet), each
+/// checked to be writable, and none the same file as another or as the
+/// report: all before any simulation.
+pub fn plan_outputs(timeline: &Timeline, options: &BakeOptions) -> Result<Vec<PathBuf>, BakeError> {
+    let mut planned: Vec<(PathBuf, std::ops::Range<usize>)> = Vec::new();
+    if !options.dry {
+        for e in &timeline.file.exports {
+            planned.push((output_path(options, e.path.get_ref()), e.path.span()));
+        }
+        if let Some(preview) = &timeline.file.preview {
+            planned.push((
+                output_path(options, preview.sheet.get_ref()),
+                preview.sheet.span(),
+            ));
+        }
+    }
+    let mut seen: Vec<(PathBuf, &Path)> = Vec::new();
+    if let Some(report) = &options.report {
+        let canonical = outputs::canonical(report).map_err(|source| BakeError::Io {
+            file: report.clone(),
+            source,
+        })?;
+        seen.push((canonical, report));
+    }
+    for (path, span) in &planned {
+        let canonical = outputs::canonical(path).map_err(|source| BakeError::Io {
+            file: path.clone(),
+            source,
+        })?;
+        if let Some((_, other)) = seen.iter().find(|(c, _)| *c == canonical) {
+            let message = if options.report.as_deref() == Some(*other) {
+                format!(
+                    "the report '{}' would overwrite this output",
+                    other.display()
+                )
+            } else {
+                format!(
+                    "'{}' and '{}' are the same file",
+                    other.display(),
+                    path.display()
+                )
+            };
+            return Err(timeline.error_at(span.clone(), message).into());
+        }
+        seen.push((canonical, path));
+    }
+    for (path, _) in seen.iter().rev() {
+        outputs::check_writable(path).map_err(|message| BakeError::Output {
+            file: path.to_path_buf(),
+            message,
+        })?;
+    }
+    Ok(planned.into_iter().map(|(p, _)| p).collect())
 }
 
 /// An animated export under way.
@@ -307,7 +432,6 @@ fn write_sheet(
         })
         .collect();
     let image = crate::preview::render_sheet(&entries, &options)?;
-    create_parent(path)?;
     crate::preview::write_png(&image, path)?;
     Ok(())
 }
@@ -325,14 +449,16 @@ fn create_parent(path: &Path) -> Result<(), BakeError> {
     }
 }
 
-/// The report line of a written output: its size and SHA-256.
+/// The report line of an output written to `staged` for `path`: its size
+/// and SHA-256.
 fn output_report(
+    staged: &Path,
     path: &Path,
     what: String,
     frames: Option<usize>,
 ) -> Result<OutputReport, BakeError> {
-    let (bytes, sha256) = size_and_sha256(path).map_err(|source| BakeError::Io {
-        file: path.to_path_buf(),
+    let (bytes, sha256) = size_and_sha256(staged).map_err(|source| BakeError::Io {
+        file: staged.to_path_buf(),
         source,
     })?;
     Ok(OutputReport {
@@ -435,6 +561,11 @@ struct BakeRun<'a> {
     total_time: f64,
     /// The exports this run writes (none for a dry run).
     exports: &'a [super::schema::ExportSpec],
+    /// Final paths of the exports and then the sheet, and where each is
+    /// staged until the end.
+    finals: Vec<PathBuf>,
+    staged: Vec<PathBuf>,
+    staging: Staging,
     animated: Vec<AnimatedExport>,
     /// Steps done over all stages.
     step_index: u64,
@@ -462,6 +593,7 @@ impl<'a> BakeRun<'a> {
         threads: usize,
     ) -> Result<BakeRun<'a>, BakeError> {
         let started = Instant::now();
+        let finals = plan_outputs(timeline, options)?;
         let Prepared {
             groom,
             strands,
@@ -477,23 +609,32 @@ impl<'a> BakeRun<'a> {
             .iter()
             .map(StagePlan::new)
             .collect();
-        let stage_steps: Vec<u64> = plans.iter().map(|p| steps_of(p.duration, dt)).collect();
+        let stage_steps = timeline.stage_steps();
         let total_steps: u64 = stage_steps.iter().sum();
-        let report = BakeReport {
-            timeline: timeline.path.display().to_string(),
-            groombake_version: env!("CARGO_PKG_VERSION").to_string(),
+        let mut report = BakeReport {
             seed,
             threads,
             strands: strands.strand_count(),
             vertices: strands.vertex_count(),
-            ..BakeReport::default()
+            ..BakeReport::start(&timeline.path)
         };
+        report.record_sources(timeline);
         // A dry run (a preview of the timeline) writes no file.
         let exports: &[super::schema::ExportSpec] = if options.dry {
             &[]
         } else {
             &timeline.file.exports
         };
+        // Temporaries of killed bakes into the same folders go first.
+        let mut ours = finals.clone();
+        ours.extend(options.report.clone());
+        let removed = outputs::remove_stale_temporaries(&ours);
+        let mut staging = Staging::default();
+        let mut staged = Vec::new();
+        for path in &finals {
+            create_parent(path)?;
+            staged.push(staging.stage(path));
+        }
         let mut run = BakeRun {
             timeline,
             options,
@@ -508,11 +649,20 @@ impl<'a> BakeRun<'a> {
             stage_steps,
             total_time: total_steps as f64 * dt,
             exports,
+            finals,
+            staged,
+            staging,
             animated: Vec::new(),
             step_index: 0,
             snapshots: Vec::new(),
             report,
         };
+        if !removed.is_empty() {
+            run.report.warnings.push(format!(
+                "removed {} temporary file(s) left by a stopped bake",
+                removed.len()
+            ));
+        }
         run.open_animated()?;
         run.write_due_frames()?;
         run.snapshot("before".to_string());
@@ -530,10 +680,8 @@ impl<'a> BakeRun<'a> {
             let (units, up) = export_units(self.timeline, index);
             let mut base = self.groom_now(false);
             base.convert_to(units, up);
-            let path = output_path(self.options, e.path.get_ref());
-            create_parent(&path)?;
             let writer = exporters::animated(
-                &path,
+                &self.staged[index],
                 &base,
                 exporters::AnimationOptions { fps, frame_count },
             )?;
@@ -641,6 +789,7 @@ impl<'a> BakeRun<'a> {
         };
         let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
+            self.options.interrupted()?;
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
             let contained = self.advance(&mut stage, t_local, t_end)?;
@@ -782,7 +931,8 @@ impl<'a> BakeRun<'a> {
             a.writer.finish()?;
         }
         for (index, e) in self.exports.iter().enumerate() {
-            let path = output_path(self.options, e.path.get_ref());
+            self.options.interrupted()?;
+            let (path, staged) = (&self.finals[index], &self.staged[index]);
             if e.what != ExportWhat::Animated {
                 let (units, up) = export_units(self.timeline, index);
                 let mut out = match e.what {
@@ -794,21 +944,30 @@ impl<'a> BakeRun<'a> {
                     ExportWhat::Animated => continue,
                 };
                 out.convert_to(units, up);
-                create_parent(&path)?;
-                exporters::write(&path, &out)?;
+                exporters::write(staged, &out)?;
             }
             let what = format!("{:?}", e.what).to_lowercase();
             self.report
                 .outputs
-                .push(output_report(&path, what, frames_of[index])?);
+                .push(output_report(staged, path, what, frames_of[index])?);
         }
-        if let (Some(preview), false) = (&self.timeline.file.preview, self.options.dry) {
-            let path = output_path(self.options, preview.sheet.get_ref());
-            write_sheet(self.timeline, &self.snapshots, &path)?;
+        if let (Some(_), false) = (&self.timeline.file.preview, self.options.dry) {
+            let index = self.exports.len();
+            let (path, staged) = (&self.finals[index], &self.staged[index]);
+            write_sheet(self.timeline, &self.snapshots, staged)?;
             self.report
                 .outputs
-                .push(output_report(&path, "sheet".into(), None)?);
+                .push(output_report(staged, path, "sheet".into(), None)?);
         }
+        // Everything is written: into place together, the report after.
+        self.options.interrupted()?;
+        let staging = std::mem::take(&mut self.staging);
+        staging
+            .commit(self.options.report.as_deref())
+            .map_err(|source| BakeError::Io {
+                file: self.finals.first().cloned().unwrap_or_default(),
+                source,
+            })?;
         self.report.simulated_seconds = self.total_time;
         self.report.wall_seconds = self.started.elapsed().as_secs_f64();
         Ok(BakeOutcome {
@@ -816,9 +975,4 @@ impl<'a> BakeRun<'a> {
             snapshots: self.snapshots,
         })
     }
-}
-
-/// Steps of a stage of `duration` seconds at `dt` (at least one).
-fn steps_of(duration: f64, dt: f64) -> u64 {
-    ((duration / dt).round() as u64).max(1)
 }
