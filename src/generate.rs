@@ -139,6 +139,15 @@ impl GeneratorParameters {
         if !finite {
             return fail("parameters", "every number must be finite");
         }
+        // The product, not only each factor: 10 M strands of 10 k segments
+        // would ask for a terabyte.
+        let per_strand = self.edges_per_strand() as u64 + 1;
+        if let Err(message) = crate::budget::check_vertices(self.strands as u64, per_strand) {
+            return Err(GeneratorError {
+                name: "strands",
+                message,
+            });
+        }
         Ok(())
     }
 }

@@ -2,8 +2,9 @@
 //! of treatments and previews. The command line in `main.rs` only composes
 //! these.
 
-pub mod bench;
 pub mod batch;
+pub mod bench;
+pub mod budget;
 pub mod diff;
 pub mod generate;
 pub mod preview;

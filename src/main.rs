@@ -16,7 +16,7 @@ fn main() -> ExitCode {
             if cli::is_broken_pipe(&error) {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("groombake: {error:#}");
+            eprintln!("groombake: {}", cli::message_of(&error));
             ExitCode::from(cli::exit_code_for(&error))
         }
     }

@@ -95,10 +95,18 @@ impl FromStr for Units {
             "inch" | "inches" => return Ok(Units::INCHES),
             _ => {}
         }
+        // A scale outside this range turns a groom's f32 coordinates into
+        // infinities or zeros (a 10 cm hair at 1e300 m per unit).
+        const RANGE: std::ops::RangeInclusive<f64> = 1e-6..=1e6;
         match lower.parse::<f64>() {
-            Ok(m) if m.is_finite() && m > 0.0 => Ok(Units { meters_per_unit: m }),
+            Ok(m) if RANGE.contains(&m) => Ok(Units { meters_per_unit: m }),
+            Ok(m) if m.is_finite() && m > 0.0 => Err(format!(
+                "units {:?}: metres per unit must be between 1e-6 and 1e6",
+                s.escape_debug().to_string()
+            )),
             _ => Err(format!(
-                "unknown units '{s}' (expected m, cm, mm, in, or metres per unit)"
+                "unknown units {:?} (expected m, cm, mm, in, or metres per unit)",
+                s.escape_debug().to_string()
             )),
         }
     }
@@ -171,6 +179,8 @@ mod tests {
         assert_eq!("0.5".parse::<Units>().unwrap().meters_per_unit, 0.5);
         assert!("-1".parse::<Units>().is_err());
         assert!("furlong".parse::<Units>().is_err());
+        assert!("1e-300".parse::<Units>().is_err());
+        assert!("1e300".parse::<Units>().is_err());
         assert_eq!(Units::CENTIMETERS.to_string(), "cm");
     }
 

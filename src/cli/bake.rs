@@ -3,10 +3,13 @@
 
 use super::BadInput;
 use clap::Args;
-use groombake::timeline::bake::{bake, prepare, BakeError, BakeOptions};
+use groombake::timeline::bake::{bake, plan_outputs, prepare, BakeError, BakeOptions};
+use groombake::timeline::report::BakeReport;
 use groombake::timeline::Timeline;
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicUsize;
+use std::sync::Arc;
 
 #[derive(Debug, Args)]
 pub struct BakeArgs {
@@ -15,18 +18,30 @@ pub struct BakeArgs {
     /// Folder that relative export paths are written under (default: the current folder).
     #[arg(long, default_value = ".")]
     out: PathBuf,
-    /// Worker threads (default: one per core). Outputs are identical for any count.
-    #[arg(long)]
+    /// Worker threads (default: one per core; at most 1024). Outputs are identical for any count.
+    #[arg(long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Seed of the random processes (overrides the timeline's `seed`).
     #[arg(long)]
     seed: Option<u64>,
-    /// Write a JSON report (stages, timings, counts, warnings, outputs with SHA-256).
+    /// Write a JSON report (status, inputs' and outputs' SHA-256, stages, timings, warnings),
+    /// on failure too.
     #[arg(long)]
     report: Option<PathBuf>,
     /// No progress bars.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// `--threads`: 1 to the budget's cap.
+pub fn parse_threads(text: &str) -> Result<usize, String> {
+    let threads: usize = text.parse().map_err(|_| {
+        format!(
+            "{:?} is not a whole number",
+            text.escape_debug().to_string()
+        )
+    })?;
+    groombake::budget::check_threads(threads).map_err(|m| m.replace("--threads ", ""))
 }
 
 #[derive(Debug, Args)]
@@ -37,35 +52,75 @@ pub struct ValidateArgs {
 
 /// Maps bake errors on bad input to exit code 2.
 pub fn classify(error: BakeError) -> anyhow::Error {
-    if error.is_bad_input() {
-        BadInput(error.to_string()).into()
-    } else {
-        error.into()
+    match error {
+        BakeError::Interrupted { signal } => super::Interrupted(signal).into(),
+        e if e.is_bad_input() => BadInput(e.to_string()).into(),
+        e => e.into(),
     }
 }
 
-pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
-    if args.threads == Some(0) {
-        return Err(BadInput("--threads must be at least 1".into()).into());
+/// SIGINT, SIGTERM and SIGHUP set the returned number (the signal's) so a
+/// bake stops at its next step and removes its temporaries; a second such
+/// signal ends the process at once.
+fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let signal = Arc::new(AtomicUsize::new(0));
+    for number in [SIGINT, SIGTERM, SIGHUP] {
+        let stop_now = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        // The conditional shutdown is registered first, so it sees the flag
+        // from the signal before this one.
+        signal_hook::flag::register_conditional_shutdown(number, 128 + number, stop_now.clone())?;
+        signal_hook::flag::register(number, stop_now)?;
+        signal_hook::flag::register_usize(number, signal.clone(), number as usize)?;
     }
+    Ok(signal)
+}
+
+pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
+    let mut report = BakeReport::start(&args.timeline);
+    let result = bake_and_report(&args, &mut report);
+    let Some(path) = &args.report else {
+        return result;
+    };
+    let (status, error) = match &result {
+        Ok(()) => ("ok", None),
+        Err(e) => {
+            let code = super::exit_code_for(e);
+            let status = match code {
+                2 => "invalid",
+                1 => "failed",
+                _ => "interrupted",
+            };
+            (status, Some(super::message_of(e)))
+        }
+    };
+    let code = result.as_ref().map_or_else(super::exit_code_for, |_| 0);
+    report.finish(status, code, error);
+    let written = report
+        .write(path)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
+    result.and(written)
+}
+
+fn bake_and_report(args: &BakeArgs, report: &mut BakeReport) -> anyhow::Result<()> {
+    let interrupt = stop_on_signals()?;
     let timeline = Timeline::load(&args.timeline).map_err(|e| BadInput(e.to_string()))?;
+    report.record_sources(&timeline);
     let options = BakeOptions {
-        out_dir: args.out,
+        out_dir: args.out.clone(),
         threads: args.threads,
         seed: args.seed,
         progress: !args.quiet && std::io::stderr().is_terminal(),
         dry: false,
         monitor: None,
+        report: args.report.clone(),
+        interrupt: Some(interrupt),
     };
-    let report = bake(&timeline, &options).map_err(classify)?.report;
-    if let Some(path) = &args.report {
-        let mut file = groom::AtomicFile::create(path)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        serde_json::to_writer_pretty(&mut file, &report)?;
-        std::io::Write::write_all(&mut file, b"\n")?;
-        file.commit()
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    }
+    let outcome = bake(&timeline, &options).map_err(classify)?;
+    let started = std::mem::take(&mut report.started);
+    *report = outcome.report;
+    report.started = started;
+    report.warnings.splice(0..0, timeline.warnings());
     if !args.quiet {
         for stage in &report.stages {
             eprintln!(
@@ -76,23 +131,29 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         for output in &report.outputs {
             eprintln!("wrote {} ({} bytes)", output.path, output.bytes);
         }
-        for warning in &report.warnings {
-            eprintln!("warning: {warning}");
-        }
+    }
+    for warning in &report.warnings {
+        eprintln!("warning: {warning}");
     }
     Ok(())
 }
 
 pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {
     let timeline = Timeline::load(&args.timeline).map_err(|e| BadInput(e.to_string()))?;
+    plan_outputs(&timeline, &BakeOptions::default()).map_err(classify)?;
     let prepared = prepare(&timeline, None).map_err(classify)?;
+    for warning in timeline.warnings() {
+        eprintln!("warning: {warning}");
+    }
+    let stages = timeline.file.stages.get_ref().len();
     println!(
-        "{}: ok: {} strands, {} vertices, {} colliders, {} stages ({:.3} s at dt {:.6} s), {} exports",
+        "{}: ok: {} strands, {} vertices, {} colliders, {} {} ({:.3} s at dt {:.6} s), {} exports",
         args.timeline.display(),
         prepared.strands.strand_count(),
         prepared.strands.vertex_count(),
         timeline.file.colliders.len(),
-        timeline.file.stages.get_ref().len(),
+        stages,
+        if stages == 1 { "stage" } else { "stages" },
         timeline.duration(),
         timeline.dt,
         timeline.file.exports.len()

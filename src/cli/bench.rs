@@ -14,8 +14,8 @@ pub struct BenchArgs {
     /// Vertices per strand.
     #[arg(long, default_value_t = 32)]
     vertices: usize,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads (default: all cores; at most 1024).
+    #[arg(long, value_parser = super::bake::parse_threads)]
     threads: Option<usize>,
     /// Constraint iterations per step.
     #[arg(long, default_value_t = 5)]

@@ -11,7 +11,7 @@ mod inspect;
 mod install;
 mod preview;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Debug, Parser)]
@@ -56,17 +56,82 @@ enum Command {
 #[error("{0}")]
 pub struct BadInput(pub String);
 
-/// Parses the command line; on `--help`/`--version` or a usage error, prints
-/// clap's text and returns the exit code to end with (0 or 2).
+/// Stopped by a signal (its number): exit code 128 + the number.
+#[derive(Debug, thiserror::Error)]
+#[error("stopped by signal {0}; temporaries removed, no output replaced")]
+pub struct Interrupted(pub usize);
+
+/// Parses the command line; on `--help`/`--version` prints clap's text and
+/// returns 0; on a usage error prints one line, `groombake: <where>:
+/// <what>` (the subcommand and argument, and clap's first line), and
+/// returns 2.
 pub fn parse() -> Result<Args, ExitCode> {
     Args::try_parse().map_err(|error| {
-        let _ = error.print();
-        if error.use_stderr() {
-            ExitCode::from(2)
-        } else {
-            ExitCode::SUCCESS
+        if !error.use_stderr() {
+            let _ = error.print();
+            return ExitCode::SUCCESS;
         }
+        eprintln!("groombake: {}", printable(&usage_error_line(&error)));
+        ExitCode::from(2)
     })
+}
+
+/// `<where>: <what>` of a clap usage error.
+fn usage_error_line(error: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue};
+    let rendered = error.render().to_string();
+    let what = rendered
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("bad usage")
+        .trim_start_matches("error:")
+        .trim()
+        .to_string();
+    let subcommand = std::env::args()
+        .nth(1)
+        .filter(|a| Args::command().find_subcommand(a).is_some());
+    let argument = match error.get(ContextKind::InvalidArg) {
+        Some(ContextValue::String(a)) => Some(a.clone()),
+        _ => None,
+    };
+    let place: Vec<String> = subcommand.into_iter().chain(argument).collect();
+    let place = if place.is_empty() {
+        "usage".to_string()
+    } else {
+        place.join(" ")
+    };
+    format!("{place}: {what} (see --help)")
+}
+
+/// Text safe to print: control characters (NUL, escapes, newlines) from a
+/// file or argument are shown escaped, never sent to the terminal raw.
+pub fn printable(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// An error and its causes on one line, each cause once: errors that show
+/// their source in their own text are not followed by it again.
+pub fn message_of(error: &anyhow::Error) -> String {
+    let mut message = String::new();
+    for cause in error.chain() {
+        let text = cause.to_string();
+        if message.contains(&text) {
+            continue;
+        }
+        if !message.is_empty() {
+            message.push_str(": ");
+        }
+        message.push_str(&text);
+    }
+    printable(&message)
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -88,6 +153,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 /// 2 for bad input (unreadable or malformed files, bad parameters), 1 for a
 /// failure during the work.
 pub fn exit_code_for(error: &anyhow::Error) -> u8 {
+    if let Some(Interrupted(signal)) = error.chain().find_map(|c| c.downcast_ref()) {
+        return u8::try_from(128 + signal).unwrap_or(u8::MAX);
+    }
     let bad_input = error.chain().any(|cause| {
         cause.is::<BadInput>()
             || cause.is::<importers::ImportError>()
@@ -121,6 +189,13 @@ pub fn warn_or_refuse(warnings: &[String], strict: bool) -> anyhow::Result<()> {
         eprintln!("groombake: warning: {warning}");
     }
     Ok(())
+}
+
+/// Refuses an output path whose extension names no format, before any
+/// input is read.
+pub fn check_output_extension(path: &std::path::Path) -> anyhow::Result<()> {
+    groombake::timeline::check_output_extension(path)
+        .map_err(|message| BadInput(format!("{}: {message}", path.display())).into())
 }
 
 /// Reads a groom file and refuses one with fatal problems, naming the first.

@@ -3,6 +3,7 @@
 //! and state exports, and reports.
 
 use super::motion::{pose_at, Pose as KeyPose};
+use super::outputs::{self, Staging};
 use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport};
 use super::schema::{ColliderActivity, ExportWhat, ShapeSpec, StageKind};
 use super::stages::{drive_wetness, PermRods, StagePlan, WindPlan};
@@ -13,7 +14,8 @@ use crate::sim::{
 use groom::{Frame, Groom, Units, UpAxis};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How to run a bake.
@@ -33,6 +35,22 @@ pub struct BakeOptions {
     /// Progress and cancellation shared with another thread (the Python
     /// module polls it while the GIL is released).
     pub monitor: Option<std::sync::Arc<BakeMonitor>>,
+    /// Where the caller will write the report: checked with the outputs,
+    /// and the old one removed before the outputs are renamed into place.
+    pub report: Option<PathBuf>,
+    /// Set to a signal's number (by a signal handler) to stop the bake; it
+    /// stops at the next step and removes its temporaries.
+    pub interrupt: Option<Arc<AtomicUsize>>,
+}
+
+impl BakeOptions {
+    /// The signal that asked the bake to stop, if one did.
+    fn interrupted(&self) -> Result<(), BakeError> {
+        match self.interrupt.as_ref().map(|i| i.load(Ordering::Relaxed)) {
+            Some(signal) if signal != 0 => Err(BakeError::Interrupted { signal }),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// The steps a running bake has done, and a request to stop it.
@@ -76,6 +94,12 @@ pub enum BakeError {
     },
     #[error("thread pool: {0}")]
     Threads(String),
+    /// An output or report path that cannot be written or names the same
+    /// file as another.
+    #[error("{}: {message}", file.display())]
+    Output { file: PathBuf, message: String },
+    #[error("stopped by signal {signal}; temporaries removed, no output replaced")]
+    Interrupted { signal: usize },
     #[error(transparent)]
     Preview(#[from] crate::preview::PreviewError),
     #[error("the bake was interrupted")]
@@ -87,7 +111,10 @@ impl BakeError {
     pub fn is_bad_input(&self) -> bool {
         matches!(
             self,
-            BakeError::Timeline(_) | BakeError::Import(_) | BakeError::Input { .. }
+            BakeError::Timeline(_)
+                | BakeError::Import(_)
+                | BakeError::Input { .. }
+                | BakeError::Output { .. }
         )
     }
 }
@@ -168,6 +195,17 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
                 .into())
         }
     };
+    if groom.strand_count() == 0 {
+        let file = match &spec.source {
+            Some(source) => timeline.resolve(source.get_ref()),
+            None => timeline.path.clone(),
+        };
+        return Err(BakeError::Input {
+            file,
+            message: "the groom has no strands".into(),
+        });
+    }
+    timeline.check_budget(groom.points.len() as u64)?;
     groom.convert_to(Units::METERS, UpAxis::Y);
     groom.frames.clear();
     if spec.translate != [0.0; 3] {
@@ -245,6 +283,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     }
     let parameters = parameters_of(timeline);
     parameters.check()?;
+    check_preview_color(timeline, &groom)?;
     Ok(Prepared {
         groom,
         strands,
@@ -252,6 +291,91 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         parameters,
         seed: seed_override.or(timeline.file.seed).unwrap_or(0),
     })
+}
+
+/// Refuses a `[preview] color` that names no attribute of the snapshots
+/// (the groom's own, the bond rates and wetness).
+fn check_preview_color(timeline: &Timeline, groom: &Groom) -> Result<(), TimelineError> {
+    let Some(color) = timeline
+        .file
+        .preview
+        .as_ref()
+        .and_then(|p| p.color.as_ref())
+    else {
+        return Ok(());
+    };
+    let name = color.get_ref().as_str();
+    let mut names: Vec<&str> = groom.attributes.iter().map(|a| a.name.as_str()).collect();
+    names.extend(attribute_names::BOND_RATES);
+    names.push(attribute_names::WETNESS);
+    if names.contains(&name) {
+        return Ok(());
+    }
+    names.sort_unstable();
+    names.dedup();
+    Err(timeline.error_at(
+        color.span(),
+        format!(
+            "no attribute {:?} to colour by (there are: {})",
+            name.escape_debug().to_string(),
+            names.join(", ")
+        ),
+    ))
+}
+
+/// The final paths of the bake's outputs (exports, then the sheet), each
+/// checked to be writable, and none the same file as another or as the
+/// report: all before any simulation.
+pub fn plan_outputs(timeline: &Timeline, options: &BakeOptions) -> Result<Vec<PathBuf>, BakeError> {
+    let mut planned: Vec<(PathBuf, std::ops::Range<usize>)> = Vec::new();
+    if !options.dry {
+        for e in &timeline.file.exports {
+            planned.push((output_path(options, e.path.get_ref()), e.path.span()));
+        }
+        if let Some(preview) = &timeline.file.preview {
+            planned.push((
+                output_path(options, preview.sheet.get_ref()),
+                preview.sheet.span(),
+            ));
+        }
+    }
+    let mut seen: Vec<(PathBuf, &Path)> = Vec::new();
+    if let Some(report) = &options.report {
+        let canonical = outputs::canonical(report).map_err(|source| BakeError::Io {
+            file: report.clone(),
+            source,
+        })?;
+        seen.push((canonical, report));
+    }
+    for (path, span) in &planned {
+        let canonical = outputs::canonical(path).map_err(|source| BakeError::Io {
+            file: path.clone(),
+            source,
+        })?;
+        if let Some((_, other)) = seen.iter().find(|(c, _)| *c == canonical) {
+            let message = if options.report.as_deref() == Some(*other) {
+                format!(
+                    "the report '{}' would overwrite this output",
+                    other.display()
+                )
+            } else {
+                format!(
+                    "'{}' and '{}' are the same file",
+                    other.display(),
+                    path.display()
+                )
+            };
+            return Err(timeline.error_at(span.clone(), message).into());
+        }
+        seen.push((canonical, path));
+    }
+    for (path, _) in seen.iter().rev() {
+        outputs::check_writable(path).map_err(|message| BakeError::Output {
+            file: path.to_path_buf(),
+            message,
+        })?;
+    }
+    Ok(planned.into_iter().map(|(p, _)| p).collect())
 }
 
 /// An animated export under way.
@@ -346,7 +470,6 @@ fn write_sheet(
         })
         .collect();
     let image = crate::preview::render_sheet(&entries, &options)?;
-    create_parent(path)?;
     crate::preview::write_png(&image, path)?;
     Ok(())
 }
@@ -364,14 +487,16 @@ fn create_parent(path: &Path) -> Result<(), BakeError> {
     }
 }
 
-/// The report line of a written output: its size and SHA-256.
+/// The report line of an output written to `staged` for `path`: its size
+/// and SHA-256.
 fn output_report(
+    staged: &Path,
     path: &Path,
     what: String,
     frames: Option<usize>,
 ) -> Result<OutputReport, BakeError> {
-    let (bytes, sha256) = size_and_sha256(path).map_err(|source| BakeError::Io {
-        file: path.to_path_buf(),
+    let (bytes, sha256) = size_and_sha256(staged).map_err(|source| BakeError::Io {
+        file: staged.to_path_buf(),
         source,
     })?;
     Ok(OutputReport {
@@ -437,7 +562,11 @@ fn progress_bars(
     (multi, overall, stage)
 }
 
-/// Runs the timeline and writes its exports.
+/// Runs the timeline and writes its exports, in three phases like a
+/// physics pipeline's step: [`BakeRun::prepare`] (everything checked and
+/// every output opened before the first step), [`BakeRun::run_stages`]
+/// (the simulation, streaming animated frames) and [`BakeRun::write`] (the
+/// final, rest, state and sheet outputs and the report's lines).
 pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, BakeError> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(threads) = options.threads {
@@ -446,87 +575,181 @@ pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, B
     let pool = builder
         .build()
         .map_err(|e| BakeError::Threads(e.to_string()))?;
-    pool.install(|| bake_in_pool(timeline, options, pool.current_num_threads()))
+    pool.install(|| {
+        let mut run = BakeRun::prepare(timeline, options, pool.current_num_threads())?;
+        run.run_stages()?;
+        run.write()
+    })
 }
 
-fn bake_in_pool(
-    timeline: &Timeline,
-    options: &BakeOptions,
-    threads: usize,
-) -> Result<BakeOutcome, BakeError> {
-    let started = Instant::now();
-    let Prepared {
-        groom,
-        mut strands,
-        colliders,
-        parameters,
-        seed,
-    } = prepare(timeline, options.seed)?;
-    let dt = timeline.dt;
-    let plans: Vec<StagePlan> = timeline
-        .file
-        .stages
-        .get_ref()
-        .iter()
-        .map(StagePlan::new)
-        .collect();
-    let stage_steps: Vec<u64> = plans
-        .iter()
-        .map(|p| ((p.duration / dt).round() as u64).max(1))
-        .collect();
-    let total_steps: u64 = stage_steps.iter().sum();
-    let total_time = total_steps as f64 * dt;
-    if let Some(monitor) = &options.monitor {
-        monitor.steps_total.store(total_steps, Ordering::Relaxed);
+/// A bake under way: the prepared state, the open animated exports, the
+/// snapshots and the report so far.
+struct BakeRun<'a> {
+    timeline: &'a Timeline,
+    options: &'a BakeOptions,
+    started: Instant,
+    groom: Groom,
+    strands: StrandSet,
+    colliders: ColliderSet,
+    parameters: SolverParameters,
+    seed: u64,
+    dt: f64,
+    plans: Vec<StagePlan>,
+    stage_steps: Vec<u64>,
+    total_time: f64,
+    /// The exports this run writes (none for a dry run).
+    exports: &'a [super::schema::ExportSpec],
+    /// Final paths of the exports and then the sheet, and where each is
+    /// staged until the end.
+    finals: Vec<PathBuf>,
+    staged: Vec<PathBuf>,
+    staging: Staging,
+    animated: Vec<AnimatedExport>,
+    /// Steps done over all stages.
+    step_index: u64,
+    snapshots: Vec<(String, Groom)>,
+    report: BakeReport,
+}
+
+/// What one stage runs with: its solver and colliders, rods and wind.
+struct StageRun<'p> {
+    plan: &'p StagePlan,
+    solver: Solver,
+    colliders: ColliderSet,
+    motions: Vec<&'p [super::schema::KeySpec]>,
+    rods: Option<PermRods>,
+    wind: Option<WindPlan>,
+    unrolled: bool,
+}
+
+impl<'a> BakeRun<'a> {
+    /// Phase 1: prepares the strands and colliders, plans the stages, opens
+    /// the animated exports and writes their frame 0.
+    fn prepare(
+        timeline: &'a Timeline,
+        options: &'a BakeOptions,
+        threads: usize,
+    ) -> Result<BakeRun<'a>, BakeError> {
+        let started = Instant::now();
+        let finals = plan_outputs(timeline, options)?;
+        let Prepared {
+            groom,
+            strands,
+            colliders,
+            parameters,
+            seed,
+        } = prepare(timeline, options.seed)?;
+        let dt = timeline.dt;
+        let plans: Vec<StagePlan> = timeline
+            .file
+            .stages
+            .get_ref()
+            .iter()
+            .map(StagePlan::new)
+            .collect();
+        let stage_steps = timeline.stage_steps();
+        let total_steps: u64 = stage_steps.iter().sum();
+        if let Some(monitor) = &options.monitor {
+            monitor.steps_total.store(total_steps, Ordering::Relaxed);
+        }
+        let mut report = BakeReport {
+            seed,
+            threads,
+            strands: strands.strand_count(),
+            vertices: strands.vertex_count(),
+            ..BakeReport::start(&timeline.path)
+        };
+        report.record_sources(timeline);
+        // A dry run (a preview of the timeline) writes no file.
+        let exports: &[super::schema::ExportSpec] = if options.dry {
+            &[]
+        } else {
+            &timeline.file.exports
+        };
+        // Temporaries of killed bakes into the same folders go first.
+        let mut ours = finals.clone();
+        ours.extend(options.report.clone());
+        let removed = outputs::remove_stale_temporaries(&ours);
+        let mut staging = Staging::default();
+        let mut staged = Vec::new();
+        for path in &finals {
+            create_parent(path)?;
+            staged.push(staging.stage(path));
+        }
+        let mut run = BakeRun {
+            timeline,
+            options,
+            started,
+            groom,
+            strands,
+            colliders,
+            parameters,
+            seed,
+            dt,
+            plans,
+            stage_steps,
+            total_time: total_steps as f64 * dt,
+            exports,
+            finals,
+            staged,
+            staging,
+            animated: Vec::new(),
+            step_index: 0,
+            snapshots: Vec::new(),
+            report,
+        };
+        if !removed.is_empty() {
+            run.report.warnings.push(format!(
+                "removed {} temporary file(s) left by a stopped bake",
+                removed.len()
+            ));
+        }
+        run.open_animated()?;
+        run.write_due_frames()?;
+        run.snapshot("before".to_string());
+        Ok(run)
     }
 
-    // Open the animated exports and write frame 0.
-    let mut animated = Vec::new();
-    // A dry run (a preview of the timeline) writes no file.
-    let exports: &[super::schema::ExportSpec] = if options.dry {
-        &[]
-    } else {
-        &timeline.file.exports
-    };
-    for (index, e) in exports.iter().enumerate() {
-        if e.what != ExportWhat::Animated {
-            continue;
+    /// Opens every animated export with the groom as it starts.
+    fn open_animated(&mut self) -> Result<(), BakeError> {
+        for (index, e) in self.exports.iter().enumerate() {
+            if e.what != ExportWhat::Animated {
+                continue;
+            }
+            let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
+            let frame_count = (self.total_time * fps + 1e-6).floor() as usize + 1;
+            let (units, up) = export_units(self.timeline, index);
+            let mut base = self.groom_now(false);
+            base.convert_to(units, up);
+            let writer = exporters::animated(
+                &self.staged[index],
+                &base,
+                exporters::AnimationOptions { fps, frame_count },
+            )?;
+            self.animated.push(AnimatedExport {
+                index,
+                writer,
+                fps,
+                frames_written: 0,
+                frame_count,
+                units,
+                up,
+            });
         }
-        let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
-        let frame_count = (total_time * fps + 1e-6).floor() as usize + 1;
-        let (units, up) = export_units(timeline, index);
-        let mut base = groom_now(&groom, &strands, strands.positions().to_vec(), false);
-        base.convert_to(units, up);
-        let path = output_path(options, e.path.get_ref());
-        create_parent(&path)?;
-        let writer = exporters::animated(
-            &path,
-            &base,
-            exporters::AnimationOptions { fps, frame_count },
-        )?;
-        animated.push(AnimatedExport {
-            index,
-            writer,
-            fps,
-            frames_written: 0,
-            frame_count,
-            units,
-            up,
-        });
+        Ok(())
     }
-    let write_frames = |animated: &mut Vec<AnimatedExport>,
-                        strands: &StrandSet,
-                        step: u64|
-     -> Result<(), BakeError> {
-        for a in animated.iter_mut() {
-            // Frame k belongs to the step nearest k / fps.
+
+    /// Writes the animated frames due by the current step: frame k belongs
+    /// to the step nearest k / fps.
+    fn write_due_frames(&mut self) -> Result<(), BakeError> {
+        for a in self.animated.iter_mut() {
             while a.frames_written < a.frame_count {
                 let k = a.frames_written;
-                let due = ((k as f64 / a.fps) / dt).round() as u64;
-                if due > step {
+                let due = ((k as f64 / a.fps) / self.dt).round() as u64;
+                if due > self.step_index {
                     break;
                 }
-                let mut points = strands.positions().to_vec();
+                let mut points = self.strands.positions().to_vec();
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let frame = Frame {
                     time: k as f64 / a.fps,
@@ -537,27 +760,58 @@ fn bake_in_pool(
             }
         }
         Ok(())
-    };
-    write_frames(&mut animated, &strands, 0)?;
-    let mut snapshots = vec![(
-        "before".to_string(),
-        groom_now(&groom, &strands, strands.positions().to_vec(), false),
-    )];
+    }
 
-    let (_multi, overall, stage_bar) = progress_bars(options, total_steps);
-    let mut report = BakeReport {
-        timeline: timeline.path.display().to_string(),
-        groombake_version: env!("CARGO_PKG_VERSION").to_string(),
-        seed,
-        threads,
-        strands: strands.strand_count(),
-        vertices: strands.vertex_count(),
-        ..BakeReport::default()
-    };
-    let mut step_index: u64 = 0;
-    let mut global_time = 0.0f64;
-    for (stage_index, (plan, &steps)) in plans.iter().zip(&stage_steps).enumerate() {
+    /// The groom as it is now (see [`groom_now`]).
+    fn groom_now(&self, with_state: bool) -> Groom {
+        groom_now(
+            &self.groom,
+            &self.strands,
+            self.strands.positions().to_vec(),
+            with_state,
+        )
+    }
+
+    fn snapshot(&mut self, label: String) {
+        let groom = self.groom_now(false);
+        self.snapshots.push((label, groom));
+    }
+
+    /// Phase 2: runs every stage in order.
+    fn run_stages(&mut self) -> Result<(), BakeError> {
+        let total_steps: u64 = self.stage_steps.iter().sum();
+        let (_multi, overall, stage_bar) = progress_bars(self.options, total_steps);
+        let mut global_time = 0.0f64;
+        for stage_index in 0..self.plans.len() {
+            let stage_report = self.run_stage(stage_index, global_time, &overall, &stage_bar)?;
+            global_time += stage_report.steps as f64 * self.dt;
+            self.report.warnings.extend(
+                stage_report
+                    .warnings
+                    .iter()
+                    .map(|w| format!("stage {stage_index}: {w}")),
+            );
+            self.report.stages.push(stage_report);
+        }
+        stage_bar.finish_and_clear();
+        overall.finish_and_clear();
+        Ok(())
+    }
+
+    /// Runs one stage from `global_time` and reports it.
+    fn run_stage(
+        &mut self,
+        stage_index: usize,
+        global_time: f64,
+        overall: &ProgressBar,
+        stage_bar: &ProgressBar,
+    ) -> Result<StageReport, BakeError> {
+        let timeline = self.timeline;
         let spec = &timeline.file.stages.get_ref()[stage_index];
+        // A copy, so the stage can borrow it while the run changes.
+        let plan = &self.plans[stage_index].clone();
+        let steps = self.stage_steps[stage_index];
+        let dt = self.dt;
         let stage_started = Instant::now();
         let name = spec
             .name
@@ -574,107 +828,29 @@ fn bake_in_pool(
             steps,
             ..StageReport::default()
         };
-        let active: Vec<bool> = timeline
-            .file
-            .colliders
-            .iter()
-            .map(|c| {
-                c.active == ColliderActivity::Always
-                    || spec
-                        .colliders
-                        .iter()
-                        .any(|n| n.get_ref() == c.name.get_ref())
-            })
-            .collect();
-        let mut stage_parameters = parameters;
-        if let Some(d) = &spec.damping {
-            stage_parameters.linear_damping = d.linear;
-            stage_parameters.angular_damping = d.angular;
-        }
-        let mut solver = Solver::new(stage_parameters)?;
-        // The colliders of this stage, where their motion has them now.
-        let mut stage_colliders = ColliderSet::new();
-        let mut stage_motions = Vec::new();
-        for ((collider, spec), &on) in colliders
-            .colliders
-            .iter()
-            .zip(&timeline.file.colliders)
-            .zip(&active)
-        {
-            if on {
-                let keys = spec.motion.get_ref().as_slice();
-                let mut collider = collider.clone();
-                collider.set_pose(pose_of(pose_at(keys, global_time)));
-                stage_colliders.insert(collider);
-                stage_motions.push(keys);
-            }
-        }
-        if plan.release_targets {
-            strands.clear_kinematic_targets();
-        }
-        let rods = plan
-            .perm
-            .as_ref()
-            .map(|p| PermRods::new(&strands, p, parameters.hair_radius));
-        let mut wind = match (plan.kind, &plan.wind) {
-            (StageKind::Wind, Some(spec)) => Some(WindPlan::new(&strands, spec.clone(), seed)),
-            _ => None,
-        };
-        let mut unrolled = false;
+        let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
+            self.options.interrupted()?;
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
-            // The scalp and the kinematic colliders take their pose at the
-            // end of the step; colliders also the velocity that gets them
-            // there (friction drags hair along).
-            if !timeline.file.groom.motion.get_ref().is_empty() {
-                strands.set_root_transform(&pose_of(pose_at(
-                    timeline.file.groom.motion.get_ref(),
-                    t_end,
-                )));
-            }
-            for (collider, keys) in stage_colliders.colliders.iter_mut().zip(&stage_motions) {
-                collider.move_to(pose_of(pose_at(keys, t_end)), dt as f32);
-            }
-            if let (Some(rods), Some(perm)) = (&rods, &plan.perm) {
-                if t_local < perm.set_end {
-                    rods.wind(&mut strands, ((t_local + dt) / perm.roll_end).min(1.0))?;
-                } else if !unrolled {
-                    rods.unroll(&mut strands)?;
-                    unrolled = true;
-                }
-            }
-            let (environment, wetness) = plan.environment_at(t_local);
-            if let Some((target, rate)) = wetness {
-                drive_wetness(&mut strands, target, rate, dt as f32);
-            }
-            if let Some(wind) = wind.as_mut() {
-                if wind.advance_to(t_local + dt) {
-                    wind.apply(&mut strands);
-                }
-            } else {
-                let step_report = solver.step(&mut strands, &stage_colliders, &environment)?;
-                stage_report.contained_strands.extend(step_report.contained);
-            }
-            step_index += 1;
-            if let Some(monitor) = &options.monitor {
-                monitor.steps_done.store(step_index, Ordering::Relaxed);
+            let contained = self.advance(&mut stage, t_local, t_end)?;
+            stage_report.contained_strands.extend(contained);
+            self.step_index += 1;
+            if let Some(monitor) = &self.options.monitor {
+                monitor.steps_done.store(self.step_index, Ordering::Relaxed);
                 if monitor.cancel.load(Ordering::Relaxed) {
                     return Err(BakeError::Cancelled);
                 }
             }
-            write_frames(&mut animated, &strands, step_index)?;
+            self.write_due_frames()?;
             stage_bar.inc(1);
             overall.inc(1);
         }
-        if wind.is_some() {
-            strands = with_frames_from_positions(&groom, &strands, &material_of(timeline))?;
+        if stage.wind.is_some() {
+            self.strands =
+                with_frames_from_positions(&self.groom, &self.strands, &material_of(timeline))?;
         }
-        global_time += steps as f64 * dt;
-        snapshots.push((
-            format!("after {}", stage_report.name),
-            groom_now(&groom, &strands, strands.positions().to_vec(), false),
-        ));
+        self.snapshot(format!("after {}", stage_report.name));
         if !stage_report.contained_strands.is_empty() {
             stage_report.warnings.push(format!(
                 "{} strand(s) turned non-finite and were frozen: {:?}",
@@ -683,63 +859,173 @@ fn bake_in_pool(
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();
-        report.warnings.extend(
-            stage_report
-                .warnings
-                .iter()
-                .map(|w| format!("stage {stage_index}: {w}")),
-        );
-        report.stages.push(stage_report);
+        Ok(stage_report)
     }
-    stage_bar.finish_and_clear();
-    overall.finish_and_clear();
 
-    // Finish the animated exports, then write the static ones.
-    let mut frames_of = vec![None; exports.len()];
-    for a in animated {
-        frames_of[a.index] = Some(a.frames_written);
-        a.writer.finish()?;
-    }
-    for (index, e) in exports.iter().enumerate() {
-        let path = output_path(options, e.path.get_ref());
-        if e.what != ExportWhat::Animated {
-            let (units, up) = export_units(timeline, index);
-            let mut out = match e.what {
-                ExportWhat::Final => {
-                    groom_now(&groom, &strands, strands.positions().to_vec(), false)
-                }
-                ExportWhat::Rest => groom_now(&groom, &strands, strands.rest_pose(), false),
-                ExportWhat::State => {
-                    groom_now(&groom, &strands, strands.positions().to_vec(), true)
-                }
-                ExportWhat::Animated => continue,
-            };
-            out.convert_to(units, up);
-            create_parent(&path)?;
-            exporters::write(&path, &out)?;
+    /// Sets a stage up: its active colliders where their motion has them
+    /// at `global_time`, its solver, rods and wind.
+    fn start_stage<'p>(
+        &mut self,
+        spec: &super::schema::StageSpec,
+        plan: &'p StagePlan,
+        global_time: f64,
+    ) -> Result<StageRun<'p>, BakeError>
+    where
+        'a: 'p,
+    {
+        let timeline = self.timeline;
+        let mut stage_parameters = self.parameters;
+        if let Some(d) = &spec.damping {
+            stage_parameters.linear_damping = d.linear;
+            stage_parameters.angular_damping = d.angular;
         }
-        let (units, _) = export_units(timeline, index);
-        report
-            .warnings
-            .extend(exporters::units_warning(&path, units));
-        let what = format!("{:?}", e.what).to_lowercase();
-        report
-            .outputs
-            .push(output_report(&path, what, frames_of[index])?);
+        let solver = Solver::new(stage_parameters)?;
+        let mut colliders = ColliderSet::new();
+        let mut motions = Vec::new();
+        for (collider, collider_spec) in self
+            .colliders
+            .colliders
+            .iter()
+            .zip(&timeline.file.colliders)
+        {
+            let on = collider_spec.active == ColliderActivity::Always
+                || spec
+                    .colliders
+                    .iter()
+                    .any(|n| n.get_ref() == collider_spec.name.get_ref());
+            if on {
+                let keys = collider_spec.motion.get_ref().as_slice();
+                let mut collider = collider.clone();
+                collider.set_pose(pose_of(pose_at(keys, global_time)));
+                colliders.insert(collider);
+                motions.push(keys);
+            }
+        }
+        if plan.release_targets {
+            self.strands.clear_kinematic_targets();
+        }
+        let rods = plan
+            .perm
+            .as_ref()
+            .map(|p| PermRods::new(&self.strands, p, self.parameters.hair_radius));
+        let wind = match (plan.kind, &plan.wind) {
+            (StageKind::Wind, Some(wind)) => {
+                Some(WindPlan::new(&self.strands, wind.clone(), self.seed))
+            }
+            _ => None,
+        };
+        Ok(StageRun {
+            plan,
+            solver,
+            colliders,
+            motions,
+            rods,
+            wind,
+            unrolled: false,
+        })
     }
-    if let (Some(preview), false) = (&timeline.file.preview, options.dry) {
-        let path = output_path(options, preview.sheet.get_ref());
-        write_sheet(timeline, &snapshots, &path)?;
-        report
-            .outputs
-            .push(output_report(&path, "sheet".into(), None)?);
+
+    /// One step of a stage at stage time `t_local` (ending at global time
+    /// `t_end`); returns the strands contained in it.
+    fn advance(
+        &mut self,
+        stage: &mut StageRun<'_>,
+        t_local: f64,
+        t_end: f64,
+    ) -> Result<Vec<usize>, BakeError> {
+        let dt = self.dt;
+        let strands = &mut self.strands;
+        let plan = stage.plan;
+        // The scalp and the kinematic colliders take their pose at the
+        // end of the step; colliders also the velocity that gets them
+        // there (friction drags hair along).
+        let scalp = self.timeline.file.groom.motion.get_ref();
+        if !scalp.is_empty() {
+            strands.set_root_transform(&pose_of(pose_at(scalp, t_end)));
+        }
+        for (collider, keys) in stage.colliders.colliders.iter_mut().zip(&stage.motions) {
+            collider.move_to(pose_of(pose_at(keys, t_end)), dt as f32);
+        }
+        if let (Some(rods), Some(perm)) = (&stage.rods, &plan.perm) {
+            if t_local < perm.set_end {
+                rods.wind(strands, ((t_local + dt) / perm.roll_end).min(1.0))?;
+            } else if !stage.unrolled {
+                rods.unroll(strands)?;
+                stage.unrolled = true;
+            }
+        }
+        let (environment, wetness) = plan.environment_at(t_local);
+        if let Some((target, rate)) = wetness {
+            drive_wetness(strands, target, rate, dt as f32);
+        }
+        if let Some(wind) = stage.wind.as_mut() {
+            if wind.advance_to(t_local + dt) {
+                wind.apply(strands);
+            }
+            Ok(Vec::new())
+        } else {
+            let step_report = stage.solver.step(strands, &stage.colliders, &environment)?;
+            Ok(step_report.contained)
+        }
     }
-    report.simulated_seconds = total_time;
-    report.wall_seconds = started.elapsed().as_secs_f64();
-    let rest = groom_now(&groom, &strands, strands.rest_pose(), false);
-    Ok(BakeOutcome {
-        report,
-        snapshots,
-        rest,
-    })
+
+    /// Phase 3: finishes the animated exports, writes the static ones and
+    /// the sheet, and completes the report.
+    fn write(mut self) -> Result<BakeOutcome, BakeError> {
+        let mut frames_of = vec![None; self.exports.len()];
+        for a in std::mem::take(&mut self.animated) {
+            frames_of[a.index] = Some(a.frames_written);
+            a.writer.finish()?;
+        }
+        for (index, e) in self.exports.iter().enumerate() {
+            self.options.interrupted()?;
+            let (path, staged) = (&self.finals[index], &self.staged[index]);
+            if e.what != ExportWhat::Animated {
+                let (units, up) = export_units(self.timeline, index);
+                let mut out = match e.what {
+                    ExportWhat::Final => self.groom_now(false),
+                    ExportWhat::Rest => {
+                        groom_now(&self.groom, &self.strands, self.strands.rest_pose(), false)
+                    }
+                    ExportWhat::State => self.groom_now(true),
+                    ExportWhat::Animated => continue,
+                };
+                out.convert_to(units, up);
+                exporters::write(staged, &out)?;
+            }
+            let (units, _) = export_units(self.timeline, index);
+            self.report
+                .warnings
+                .extend(exporters::units_warning(path, units));
+            let what = format!("{:?}", e.what).to_lowercase();
+            self.report
+                .outputs
+                .push(output_report(staged, path, what, frames_of[index])?);
+        }
+        if let (Some(_), false) = (&self.timeline.file.preview, self.options.dry) {
+            let index = self.exports.len();
+            let (path, staged) = (&self.finals[index], &self.staged[index]);
+            write_sheet(self.timeline, &self.snapshots, staged)?;
+            self.report
+                .outputs
+                .push(output_report(staged, path, "sheet".into(), None)?);
+        }
+        // Everything is written: into place together, the report after.
+        self.options.interrupted()?;
+        let staging = std::mem::take(&mut self.staging);
+        staging
+            .commit(self.options.report.as_deref())
+            .map_err(|source| BakeError::Io {
+                file: self.finals.first().cloned().unwrap_or_default(),
+                source,
+            })?;
+        self.report.simulated_seconds = self.total_time;
+        self.report.wall_seconds = self.started.elapsed().as_secs_f64();
+        let rest = groom_now(&self.groom, &self.strands, self.strands.rest_pose(), false);
+        Ok(BakeOutcome {
+            report: self.report,
+            snapshots: self.snapshots,
+            rest,
+        })
+    }
 }

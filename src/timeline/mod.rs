@@ -4,6 +4,7 @@
 
 pub mod bake;
 pub mod motion;
+pub mod outputs;
 pub mod report;
 pub mod schema;
 pub mod stages;
@@ -15,8 +16,10 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 /// A timeline that cannot be used, with where in its file.
+/// Shown as `file:line:column: message`, or `file: message` when no place
+/// in the file is meant (line 0: the file could not be read).
 #[derive(Debug, thiserror::Error)]
-#[error("{}:{line}:{column}: {message}", file.display())]
+#[error("{}{}: {message}", file.display(), place(*line, *column))]
 pub struct TimelineError {
     pub file: PathBuf,
     pub line: usize,
@@ -36,6 +39,14 @@ pub struct Timeline {
 
 /// The names of the bond kinds, in the solver's order.
 pub const BOND_NAMES: [&str; 4] = ["hydrogen", "ionic", "disulfide", "peptide"];
+
+fn place(line: usize, column: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}:{column}")
+    }
+}
 
 /// 1-based line and column of a byte offset.
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
@@ -87,6 +98,46 @@ impl Timeline {
         };
         timeline.dt = timeline.check()?;
         Ok(timeline)
+    }
+
+    /// Steps of every stage at the timeline's `dt` (at least one each).
+    pub fn stage_steps(&self) -> Vec<u64> {
+        stage_steps_at(self, self.dt)
+    }
+
+    /// Checks the work of baking `vertices` and the size of every animated
+    /// export against the [`crate::budget`].
+    pub fn check_budget(&self, vertices: u64) -> Result<(), TimelineError> {
+        self.check_budget_with(vertices, self.dt)
+    }
+
+    fn check_budget_with(&self, vertices: u64, dt: f64) -> Result<(), TimelineError> {
+        let steps: u64 = stage_steps_at(self, dt)
+            .iter()
+            .fold(0u64, |a, &b| a.saturating_add(b));
+        crate::budget::check_work(vertices, steps)
+            .map_err(|m| self.error_at(self.file.stages.span(), m))?;
+        let total_time = steps as f64 * dt;
+        for e in &self.file.exports {
+            if let (Some(fps), ExportWhat::Animated) = (&e.fps, e.what) {
+                let frames = (total_time * fps.get_ref() + 1e-6).floor() as u64 + 1;
+                crate::budget::check_output(frames, vertices)
+                    .map_err(|m| self.error_at(e.path.span(), m))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Warnings about a timeline that is valid but probably not meant.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if self.file.exports.is_empty() {
+            warnings.push(format!(
+                "{}: no [[export]]: the bake writes no groom",
+                self.path.display()
+            ));
+        }
+        warnings
     }
 
     /// Resolves a path written in the timeline against the timeline's folder.
@@ -175,11 +226,14 @@ impl Timeline {
         // Solver.
         let s = &f.solver;
         let dt = match s.dt.get_ref().seconds() {
-            Some(dt) if dt.is_finite() && dt > 0.0 && dt <= 1.0 / 30.0 => dt,
+            Some(dt) if (crate::budget::MIN_DT..=1.0 / 30.0).contains(&dt) => dt,
             _ => {
                 return fail(
                     s.dt.span(),
-                    "dt must be a time step in (0, 1/30] s, as seconds or \"1/360\"".into(),
+                    format!(
+                        "dt must be a time step in [{}, 1/30] s, as seconds or \"1/360\"",
+                        crate::budget::MIN_DT
+                    ),
                 )
             }
         };
@@ -262,6 +316,16 @@ impl Timeline {
         for stage in stages {
             self.check_stage(stage, &names, dt)?;
         }
+        // The work and the outputs' sizes: with the generator's vertex
+        // count now, a source file's again once it is read (`check_budget`).
+        let vertices = match &f.groom.generate {
+            Some(g) => {
+                let g = g.get_ref();
+                g.strands as u64 * (g.edges_per_strand() as u64 + 1)
+            }
+            None => 0,
+        };
+        self.check_budget_with(vertices, dt)?;
 
         // Exports.
         let mut paths: Vec<&str> = Vec::new();
@@ -272,14 +336,8 @@ impl Timeline {
             }
             paths.push(path);
             let extension = importers::extension_of(Path::new(path));
-            if !exporters::EXTENSIONS.contains(&extension.as_str()) {
-                return fail(
-                    e.path.span(),
-                    format!(
-                        "unknown output format '.{extension}' (known: {})",
-                        exporters::EXTENSIONS.join(", ")
-                    ),
-                );
+            if let Err(message) = check_output_extension(Path::new(path)) {
+                return fail(e.path.span(), message);
             }
             if e.what == ExportWhat::Animated
                 && !exporters::ANIMATED_EXTENSIONS.contains(&extension.as_str())
@@ -491,8 +549,14 @@ impl Timeline {
                 && v.phases[0] < v.phases[1]
                 && v.phases[1] < v.phases[2]
                 && v.phases[2] <= 1.0;
-            if !(v.radius > 0.0
+            let axis_ok = v.axis.is_none_or(|a| {
+                a.iter().all(|c| c.is_finite()) && a.iter().map(|c| c * c).sum::<f32>() > 0.0
+            });
+            if !(v.radius.is_finite()
+                && v.radius > 0.0
+                && v.root_gap.is_finite()
                 && v.root_gap >= 0.0
+                && axis_ok
                 && (0.0..=1.0).contains(&v.disulfide_cut)
                 && phases_ok)
             {
@@ -509,6 +573,17 @@ impl Timeline {
                     && v.schedule.windows(2).all(|p| p[1].frame > p[0].frame);
                 if !(v.fps.is_finite() && v.fps > 0.0 && v.direction.is_finite() && schedule_ok) {
                     return fail(w.span(), "wind needs a finite direction, positive fps and a schedule of increasing frames (from 1) with v in [0, 1]".into());
+                }
+                // Each model frame moves every strand: more than one a step
+                // multiplies the work without being seen.
+                if v.fps > 1.0 / dt {
+                    return fail(
+                        w.span(),
+                        format!(
+                            "wind fps must be at most {} (one model frame per step)",
+                            1.0 / dt
+                        ),
+                    );
                 }
                 if !v.head.radii.iter().all(|r| r.is_finite() && *r > 0.0)
                     || !v.head.center.iter().all(|c| c.is_finite())
@@ -530,6 +605,36 @@ impl Timeline {
         }
         Ok(())
     }
+}
+
+/// Steps of every stage at `dt` (at least one each); durations were
+/// checked to be at most a day and dt at least [`crate::budget::MIN_DT`].
+fn stage_steps_at(timeline: &Timeline, dt: f64) -> Vec<u64> {
+    timeline
+        .file
+        .stages
+        .get_ref()
+        .iter()
+        .map(|s| ((s.duration.get_ref() / dt).round() as u64).max(1))
+        .collect()
+}
+
+/// Whether the exporters know the extension of `path`; the message names
+/// what is wrong (no extension, or an unknown one) and the known ones.
+pub fn check_output_extension(path: &Path) -> Result<(), String> {
+    let extension = importers::extension_of(path);
+    if exporters::EXTENSIONS.contains(&extension.as_str()) {
+        return Ok(());
+    }
+    let known = exporters::EXTENSIONS.join(", ");
+    Err(if extension.is_empty() {
+        format!("no file extension to choose the output format by (known: {known})")
+    } else {
+        format!(
+            "unknown output format {:?} (known: {known})",
+            format!(".{}", extension.escape_debug())
+        )
+    })
 }
 
 fn check_keys(

@@ -1,6 +1,7 @@
-//! The machine-readable summary of a bake (`--report R.json`).
+//! The machine-readable summary of a bake (`--report R.json`), written on
+//! success and on failure; the README documents its schema.
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 use sha2::{Digest, Sha256};
 use std::io::Read;
 use std::path::Path;
@@ -10,9 +11,11 @@ pub struct StageReport {
     pub index: usize,
     pub kind: String,
     pub name: String,
-    /// Simulated seconds.
+    /// Simulated seconds (to the microsecond).
+    #[serde(serialize_with = "micros")]
     pub simulated_seconds: f64,
-    /// Wall-clock seconds spent simulating it.
+    /// Wall-clock seconds spent simulating it (to the millisecond).
+    #[serde(serialize_with = "millis")]
     pub wall_seconds: f64,
     pub steps: u64,
     /// Strands frozen after their state turned non-finite in this stage.
@@ -30,19 +33,132 @@ pub struct OutputReport {
     pub frames: Option<usize>,
 }
 
+/// An input file of the bake and its SHA-256.
+#[derive(Debug, Clone, Serialize)]
+pub struct SourceReport {
+    pub path: String,
+    /// `groom` or `collider mesh`.
+    pub role: String,
+    pub sha256: String,
+}
+
+/// The version of the report's layout; raised when a field changes meaning
+/// or goes away.
+pub const SCHEMA_VERSION: u32 = 2;
+
 #[derive(Debug, Clone, Serialize, Default)]
 pub struct BakeReport {
+    pub schema_version: u32,
+    /// `ok`, `invalid` (bad input, exit 2), `failed` (exit 1) or
+    /// `interrupted` (a signal; exit 128 + its number).
+    pub status: String,
+    pub exit_code: u8,
+    /// The error, when the status is not `ok`.
+    pub error: Option<String>,
     pub timeline: String,
+    /// SHA-256 of the timeline file (absent when it could not be read).
+    pub timeline_sha256: Option<String>,
+    pub sources: Vec<SourceReport>,
+    /// Start and end of the run, RFC 3339 UTC.
+    pub started: String,
+    pub finished: String,
+    /// Peak resident memory of the process, bytes (getrusage).
+    pub peak_memory_bytes: u64,
     pub groombake_version: String,
     pub seed: u64,
     pub threads: usize,
     pub strands: usize,
     pub vertices: usize,
+    #[serde(serialize_with = "micros")]
     pub simulated_seconds: f64,
+    #[serde(serialize_with = "millis")]
     pub wall_seconds: f64,
     pub stages: Vec<StageReport>,
     pub outputs: Vec<OutputReport>,
     pub warnings: Vec<String>,
+}
+
+/// Seconds to the microsecond: simulated time is a whole number of steps,
+/// and the sum of steps should not read `2.3000000000000003`.
+fn micros<S: Serializer>(seconds: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.serialize_f64((seconds * 1e6).round() / 1e6)
+}
+
+/// Seconds to the millisecond: wall-clock time is not more exact.
+fn millis<S: Serializer>(seconds: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.serialize_f64((seconds * 1e3).round() / 1e3)
+}
+
+/// Now, RFC 3339 UTC to the millisecond.
+pub fn now_rfc3339() -> String {
+    humantime::format_rfc3339_millis(std::time::SystemTime::now()).to_string()
+}
+
+/// The peak resident memory of this process so far, bytes.
+pub fn peak_memory_bytes() -> u64 {
+    // SAFETY: getrusage fills the zeroed struct it is given.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) } != 0 {
+        return 0;
+    }
+    // Linux gives kilobytes.
+    u64::try_from(usage.ru_maxrss).unwrap_or(0) * 1024
+}
+
+impl BakeReport {
+    /// A report of a run of `timeline` starting now.
+    pub fn start(timeline: &Path) -> BakeReport {
+        BakeReport {
+            schema_version: SCHEMA_VERSION,
+            status: "running".into(),
+            timeline: timeline.display().to_string(),
+            timeline_sha256: size_and_sha256(timeline).ok().map(|(_, h)| h),
+            started: now_rfc3339(),
+            groombake_version: env!("CARGO_PKG_VERSION").to_string(),
+            ..BakeReport::default()
+        }
+    }
+
+    /// Records the input files of the timeline and their hashes.
+    pub fn record_sources(&mut self, timeline: &super::Timeline) {
+        let mut sources = Vec::new();
+        if let Some(source) = &timeline.file.groom.source {
+            sources.push(("groom", timeline.resolve(source.get_ref())));
+        }
+        for c in &timeline.file.colliders {
+            if let super::schema::ShapeSpec::Mesh { path, .. } = c.shape.get_ref() {
+                sources.push(("collider mesh", timeline.resolve(path)));
+            }
+        }
+        self.sources = sources
+            .into_iter()
+            .filter_map(|(role, path)| {
+                let (_, sha256) = size_and_sha256(&path).ok()?;
+                Some(SourceReport {
+                    path: path.display().to_string(),
+                    role: role.into(),
+                    sha256,
+                })
+            })
+            .collect();
+    }
+
+    /// Ends the report with the outcome.
+    pub fn finish(&mut self, status: &str, exit_code: u8, error: Option<String>) {
+        self.status = status.into();
+        self.exit_code = exit_code;
+        self.error = error;
+        self.finished = now_rfc3339();
+        self.peak_memory_bytes = peak_memory_bytes();
+    }
+
+    /// Writes the report as JSON, whole or not at all.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let mut file = groom::AtomicFile::create(path)?;
+        serde_json::to_writer_pretty(&mut file, self)?;
+        std::io::Write::write_all(&mut file, b"\n")?;
+        file.commit()
+    }
 }
 
 /// Size and SHA-256 (lower-case hex) of a file.

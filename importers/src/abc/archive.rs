@@ -326,9 +326,12 @@ fn read_time_samplings(ogawa: &Ogawa, reference: u64) -> Result<Vec<TimeSampling
         let count = u32_at(bytes, pos + 12).ok_or_else(|| bad("truncated"))? as usize;
         pos += 16;
         let available = (bytes.len() - pos.min(bytes.len())) / 8;
-        if count == 0 || count > available {
+        if count == 0 {
+            return Err(bad("no stored times (at least one is needed)"));
+        }
+        if count > available {
             return Err(bad(&format!(
-                "{count} stored times (must be 1 to {available})"
+                "{count} stored times, but the block has room for {available}"
             )));
         }
         let stored: Vec<f64> = (0..count)
