@@ -19,6 +19,10 @@ must hold; its keys, all optional:
   basis         "linear" or a cubic basis name ("bezier", "bspline", ...)
   width         scope of the widths: "vertex", "uniform" or "constant"
   unreal_groom  true: Unreal's groom attributes must be in .arbGeomParams
+  guides        number of curves with groom_guide = 1 (guides and render
+                hair); the render curves must then carry
+                groom_closest_guides (int32[3]) and groom_guide_weights
+                (float[3]) per curve, weights summing to 1, ids naming guides
   kind          "abc" (ignored: says which validator the file is for)
 
 Exits 1 on any failure, and when the directory holds no .abc file.
@@ -130,6 +134,49 @@ def check_curves(obj, file_name, failures, totals):
     if arbitrary.valid():
         names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
     totals["arbitrary"].append(names)
+    if "groom_guide" in names:
+        count_guides(arbitrary, len(counts), where, failures, totals)
+
+
+def int_values(arbitrary, name):
+    param = AbcGeom.IInt32GeomParam(arbitrary, name)
+    return param, list(param.getExpandedValue(Abc.ISampleSelector(0)).getVals())
+
+
+def count_guides(arbitrary, curves, where, failures, totals):
+    """Guides and render curves of Unreal's split, with their links."""
+    _, flags = int_values(arbitrary, "groom_guide")
+    if len(flags) != curves:
+        failures.add(where, f"groom_guide has {len(flags)} values for {curves} curves")
+        return
+    guides = [i for i, f in enumerate(flags) if f]
+    totals["guides"] += len(guides)
+    if len(guides) in (0, curves):
+        return
+    names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
+    if not {"groom_closest_guides", "groom_guide_weights", "groom_id"} <= names:
+        failures.add(where, "render curves without groom_closest_guides / groom_guide_weights / groom_id")
+        return
+    param, closest = int_values(arbitrary, "groom_closest_guides")
+    weights_param = AbcGeom.IFloatGeomParam(arbitrary, "groom_guide_weights")
+    weights = list(weights_param.getExpandedValue(Abc.ISampleSelector(0)).getVals())
+    _, ids = int_values(arbitrary, "groom_id")
+    if param.getArrayExtent() != 3 or weights_param.getArrayExtent() != 3:
+        failures.add(where, "groom_closest_guides / groom_guide_weights are not of array extent 3")
+        return
+    if len(closest) != 3 * curves or len(weights) != 3 * curves:
+        failures.add(where, f"{len(closest)} closest guides, {len(weights)} weights for {curves} curves")
+        return
+    guide_ids = {ids[i] for i in guides}
+    for c in range(curves):
+        if flags[c]:
+            continue
+        if any(closest[3 * c + k] not in guide_ids for k in range(3)):
+            failures.add(where, f"curve {c}: closest guides {closest[3 * c:3 * c + 3]} are not guide ids")
+            return
+        if abs(sum(weights[3 * c:3 * c + 3]) - 1.0) > 1e-4:
+            failures.add(where, f"curve {c}: guide weights {weights[3 * c:3 * c + 3]} do not sum to 1")
+            return
 
 
 def check_file(path, failures):
@@ -147,6 +194,7 @@ def check_file(path, failures):
         "basis": set(),
         "width": set(),
         "arbitrary": [],
+        "guides": 0,
     }
     paths = set()
     curves_objects = 0
@@ -193,7 +241,10 @@ def check_file(path, failures):
             missing = [a for a in UNREAL_ATTRIBUTES if a not in names]
             if missing:
                 failures.add(name, f"Unreal groom attributes missing from .arbGeomParams: {missing}")
-    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom"}
+    if "guides" in expect and expect["guides"] != totals["guides"]:
+        failures.add(name, f"guides: expected {expect['guides']}, found {totals['guides']}")
+    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom",
+             "guides"}
     unknown = set(expect) - known
     if unknown:
         failures.add(name, f"unknown expectation keys {sorted(unknown)}")

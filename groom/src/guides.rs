@@ -124,6 +124,94 @@ pub struct SplitGroom {
     pub render_indices: Vec<usize>,
 }
 
+/// The root (first point) of every strand; `[0; 3]` for an empty strand.
+pub fn roots(groom: &Groom) -> Vec<[f32; 3]> {
+    let offsets = groom.strand_offsets();
+    (0..groom.strand_count())
+        .map(|i| {
+            if offsets[i + 1] > offsets[i] {
+                groom.points.get(offsets[i]).copied().unwrap_or([0.0; 3])
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
+}
+
+fn distance2(a: [f32; 3], b: [f32; 3]) -> f32 {
+    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
+}
+
+/// `count` strands spread evenly over the roots: farthest-point sampling
+/// from the root nearest the roots' centre (ties by index). Returns sorted
+/// strand indices. Costs `count x roots` distance evaluations.
+pub fn pick_spread(roots: &[[f32; 3]], count: usize) -> Vec<usize> {
+    let n = roots.len();
+    if count >= n {
+        return (0..n).collect();
+    }
+    if count == 0 {
+        return Vec::new();
+    }
+    let mut centre = [0.0f64; 3];
+    for r in roots {
+        for c in 0..3 {
+            centre[c] += f64::from(r[c]) / n as f64;
+        }
+    }
+    let centre = centre.map(|c| c as f32);
+    let first = (0..n)
+        .min_by(|&a, &b| distance2(roots[a], centre).total_cmp(&distance2(roots[b], centre)))
+        .unwrap_or(0);
+    let mut nearest: Vec<f32> = roots.iter().map(|&r| distance2(r, roots[first])).collect();
+    let mut picked = vec![first];
+    while picked.len() < count {
+        let next = (0..n)
+            .max_by(|&a, &b| nearest[a].total_cmp(&nearest[b]).then(b.cmp(&a)))
+            .unwrap_or(0);
+        picked.push(next);
+        for (d, &r) in nearest.iter_mut().zip(roots) {
+            *d = d.min(distance2(r, roots[next]));
+        }
+    }
+    picked.sort_unstable();
+    picked
+}
+
+/// Every `every`-th strand in the order of a Z-curve over the roots'
+/// bounds (so neighbours on the scalp are neighbours in the order, and the
+/// picks are spread whatever the file's order). Sorted strand indices.
+pub fn pick_every(roots: &[[f32; 3]], every: usize) -> Vec<usize> {
+    let every = every.max(1);
+    let Some((min, max)) = crate::bounds_of(roots) else {
+        return Vec::new();
+    };
+    let cell = |r: [f32; 3], c: usize| -> u64 {
+        let extent = max[c] - min[c];
+        if extent > 0.0 {
+            (((r[c] - min[c]) / extent) * 1023.0)
+                .round()
+                .clamp(0.0, 1023.0) as u64
+        } else {
+            0
+        }
+    };
+    let morton = |r: [f32; 3]| -> u64 {
+        let mut code = 0u64;
+        for bit in 0..10 {
+            for c in 0..3 {
+                code |= ((cell(r, c) >> bit) & 1) << (3 * bit + c);
+            }
+        }
+        code
+    };
+    let mut order: Vec<usize> = (0..roots.len()).collect();
+    order.sort_by_key(|&i| (morton(roots[i]), i));
+    let mut picked: Vec<usize> = order.into_iter().step_by(every).collect();
+    picked.sort_unstable();
+    picked
+}
+
 /// The values at `elements`; `None` if an index is out of range.
 fn gather(values: &AttributeValues, elements: &[usize]) -> Option<AttributeValues> {
     fn pick<T: Copy>(v: &[T], elements: &[usize]) -> Option<Vec<T>> {
@@ -309,6 +397,29 @@ mod tests {
                 [0.0, 0.0, 1.0]
             ])
         );
+    }
+
+    #[test]
+    fn picks_are_spread_and_deterministic() {
+        let roots: Vec<[f32; 3]> = (0..100)
+            .map(|i| [(i % 10) as f32, 0.0, (i / 10) as f32])
+            .collect();
+        let spread = pick_spread(&roots, 4);
+        assert_eq!(spread.len(), 4);
+        assert_eq!(spread, pick_spread(&roots, 4));
+        // The four corners' quadrants each hold one pick.
+        let quadrants: std::collections::BTreeSet<(bool, bool)> = spread
+            .iter()
+            .map(|&i| (roots[i][0] < 4.5, roots[i][2] < 4.5))
+            .collect();
+        assert_eq!(quadrants.len(), 4, "{spread:?}");
+        let every = pick_every(&roots, 4);
+        assert_eq!(every.len(), 25);
+        let quadrants = every
+            .iter()
+            .filter(|&&i| roots[i][0] < 4.5 && roots[i][2] < 4.5)
+            .count();
+        assert!((5..=8).contains(&quadrants), "{quadrants}");
     }
 
     #[test]

@@ -75,7 +75,10 @@ impl BakeError {
 
 /// Everything a bake starts from, prepared (and so checked) before any step.
 pub struct Prepared {
+    /// The simulated strands (the guides, when there is render hair).
     pub groom: Groom,
+    /// Render strands that follow the guides (see [`super::render`]).
+    pub render: Option<groom::interpolate::RenderHair>,
     pub strands: StrandSet,
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
@@ -207,7 +210,8 @@ fn pose_of(pose: KeyPose) -> sim::Pose {
 /// Imports the groom, builds the strands and colliders. Everything that can
 /// be wrong with the inputs shows here, before the first step.
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
-    let groom = load_groom(timeline)?;
+    let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
+    let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
     let material = material_of(timeline);
     // A groom written by a `state` export continues where it stopped; any
     // other starts fresh (bond rates and wetness taken where present).
@@ -227,16 +231,18 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     parameters.check()?;
     Ok(Prepared {
         groom,
+        render,
         strands,
         colliders,
         parameters,
-        seed: seed_override.or(timeline.file.seed).unwrap_or(0),
+        seed,
     })
 }
 
 /// An animated export under way.
-struct AnimatedExport {
+struct AnimatedExport<'a> {
     index: usize,
+    delivery: super::render::Delivery<'a>,
     writer: Box<dyn exporters::FrameWriter>,
     fps: f64,
     frames_written: usize,
@@ -289,6 +295,14 @@ pub fn sheet_options(timeline: &Timeline) -> crate::preview::PreviewOptions {
         options.color_by = p.color.as_ref().map(|c| c.get_ref().clone());
     }
     options
+}
+
+/// The curve form of the sheet's pictures: `[preview] resample`, if given.
+fn sheet_curve_form(timeline: &Timeline) -> groom::curves::CurveForm {
+    match timeline.file.preview.as_ref().and_then(|p| p.resample) {
+        Some(segment) => groom::curves::CurveForm::Resampled { segment },
+        None => groom::curves::CurveForm::Polyline,
+    }
 }
 
 /// Renders the before/after sheet of a bake and writes it as a PNG.
@@ -418,6 +432,7 @@ fn bake_in_pool(
     let started = Instant::now();
     let Prepared {
         groom,
+        render,
         mut strands,
         colliders,
         parameters,
@@ -453,7 +468,10 @@ fn bake_in_pool(
         let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
         let frame_count = (total_time * fps + 1e-6).floor() as usize + 1;
         let (units, up) = export_units(timeline, index);
-        let mut base = groom_now(&groom, &strands, strands.positions().to_vec(), false);
+        let guides = groom_now(&groom, &strands, strands.positions().to_vec(), false);
+        let delivery =
+            super::render::Delivery::new(render.as_ref(), &guides, super::render::curve_form(e));
+        let mut base = delivery.groom(&guides);
         base.convert_to(units, up);
         let path = output_path(options, e.path.get_ref());
         create_parent(&path)?;
@@ -464,6 +482,7 @@ fn bake_in_pool(
         )?;
         animated.push(AnimatedExport {
             index,
+            delivery,
             writer,
             fps,
             frames_written: 0,
@@ -484,7 +503,7 @@ fn bake_in_pool(
                 if due > step {
                     break;
                 }
-                let mut points = strands.positions().to_vec();
+                let mut points = a.delivery.points(strands.positions());
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let frame = Frame {
                     time: k as f64 / a.fps,
@@ -497,10 +516,11 @@ fn bake_in_pool(
         Ok(())
     };
     write_frames(&mut animated, &strands, 0)?;
-    let mut snapshots = vec![(
-        "before".to_string(),
-        groom_now(&groom, &strands, strands.positions().to_vec(), false),
-    )];
+    let snapshot = |strands: &StrandSet| {
+        let guides = groom_now(&groom, strands, strands.positions().to_vec(), false);
+        super::render::deliver(render.as_ref(), &guides, sheet_curve_form(timeline))
+    };
+    let mut snapshots = vec![("before".to_string(), snapshot(&strands))];
 
     let (_multi, overall, stage_bar) = progress_bars(options, total_steps);
     let mut report = BakeReport {
@@ -623,10 +643,7 @@ fn bake_in_pool(
             strands = with_frames_from_positions(&groom, &strands, &material_of(timeline))?;
         }
         global_time += steps as f64 * dt;
-        snapshots.push((
-            format!("after {}", stage_report.name),
-            groom_now(&groom, &strands, strands.positions().to_vec(), false),
-        ));
+        snapshots.push((format!("after {}", stage_report.name), snapshot(&strands)));
         if !stage_report.contained_strands.is_empty() {
             stage_report.warnings.push(format!(
                 "{} strand(s) turned non-finite and were frozen: {:?}",
@@ -666,6 +683,7 @@ fn bake_in_pool(
                 }
                 ExportWhat::Animated => continue,
             };
+            out = super::render::deliver(render.as_ref(), &out, super::render::curve_form(e));
             out.convert_to(units, up);
             create_parent(&path)?;
             exporters::write(&path, &out)?;

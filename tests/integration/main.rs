@@ -12,6 +12,7 @@ mod bench;
 mod cli;
 mod formats;
 mod golden;
+mod guides;
 mod inspect;
 mod preview;
 mod roundtrip;
