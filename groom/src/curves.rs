@@ -367,33 +367,34 @@ fn resample_taps(strand: &[[f32; 3]], segment: f32, taps: &mut Vec<Tap>) {
 }
 
 /// A cubic groom (Catmull-Rom or B-spline control points) as a polyline of
-/// `per_span` points per span, for drawing. Linear grooms come back as
-/// they are. Vertex attributes follow the nearest control point.
-pub fn tessellate(groom: &Groom, per_span: usize) -> Groom {
+/// `per_span` points per span, for drawing; frames likewise. Other grooms
+/// come back as they are (borrowed). Vertex attributes follow the nearest
+/// control point.
+pub fn tessellate(groom: &Groom, per_span: usize) -> std::borrow::Cow<'_, Groom> {
     let basis = groom.basis;
     if !matches!(basis, CurveBasis::CatmullRom | CurveBasis::Bspline) {
-        return groom.clone();
+        return std::borrow::Cow::Borrowed(groom);
     }
     let per_span = per_span.max(1);
-    let weights = |t: f32| match basis {
+    let weights = move |t: f32| match basis {
         CurveBasis::Bspline => bspline_weights(t),
         _ => catmull_rom_weights(t),
     };
-    let mut out = groom.clone();
-    out.basis = CurveBasis::Linear;
-    out.frames.clear();
-    out.points.clear();
-    out.strand_vertex_counts.clear();
+    // Per output point: the four control points (global indices) and
+    // their weights, and the nearest control point.
+    let mut taps: Vec<([usize; 4], [f32; 4])> = Vec::new();
     let mut nearest = Vec::new();
+    let mut counts = Vec::with_capacity(groom.strand_count());
     let mut start = 0usize;
     for strand in groom.strands() {
         let n = strand.len();
+        let before = taps.len();
         if n < 4 {
-            out.points.extend_from_slice(strand);
-            nearest.extend(start..start + n);
-            out.strand_vertex_counts.push(n as u32);
+            for i in start..start + n {
+                taps.push(([i; 4], [1.0, 0.0, 0.0, 0.0]));
+                nearest.push(i);
+            }
         } else {
-            let before = out.points.len();
             for span in 1..n - 2 {
                 let last = if span == n - 3 {
                     per_span
@@ -402,29 +403,43 @@ pub fn tessellate(groom: &Groom, per_span: usize) -> Groom {
                 };
                 for k in 0..=last {
                     let t = k as f32 / per_span as f32;
-                    let w = weights(t);
-                    let mut p = [0.0f32; 3];
-                    for (q, wq) in w.iter().enumerate() {
-                        for c in 0..3 {
-                            p[c] += wq * strand[span - 1 + q][c];
-                        }
-                    }
-                    out.points.push(p);
+                    let first = start + span - 1;
+                    taps.push(([first, first + 1, first + 2, first + 3], weights(t)));
                     nearest.push(start + span + usize::from(t >= 0.5));
                 }
             }
-            out.strand_vertex_counts
-                .push((out.points.len() - before) as u32);
         }
+        counts.push((taps.len() - before) as u32);
         start += n;
     }
+    let evaluate = |points: &[[f32; 3]]| -> Vec<[f32; 3]> {
+        taps.iter()
+            .map(|(index, w)| {
+                let mut p = [0.0f32; 3];
+                for (q, wq) in index.iter().zip(w) {
+                    let c = points.get(*q).copied().unwrap_or([0.0; 3]);
+                    for k in 0..3 {
+                        p[k] += wq * c[k];
+                    }
+                }
+                p
+            })
+            .collect()
+    };
+    let mut out = groom.clone();
+    out.basis = CurveBasis::Linear;
+    out.points = evaluate(&groom.points);
+    for frame in &mut out.frames {
+        frame.points = evaluate(&frame.points);
+    }
+    out.strand_vertex_counts = counts;
     let blend: Vec<(usize, usize, f32)> = nearest.iter().map(|&i| (i, i, 0.0)).collect();
     for a in &mut out.attributes {
         if a.scope == Scope::Vertex {
             a.values = blend_values(&a.values, &blend);
         }
     }
-    out
+    std::borrow::Cow::Owned(out)
 }
 
 #[cfg(test)]

@@ -219,6 +219,17 @@ curves = "bspline"
     let bspline = read(&dir.path("bspline.abc"));
     assert_eq!(bspline.basis, groom::CurveBasis::Bspline);
     assert!(bspline.strand_vertex_counts.iter().all(|&n| n == 9));
+    // The preview draws the cubic curves smooth: it renders, and the
+    // B-spline export draws like the resampled polyline of the same pose.
+    dir.run_ok(&[
+        "preview",
+        "catmull.usda",
+        "-o",
+        "catmull.png",
+        "--size",
+        "64x64",
+    ]);
+    assert!(std::fs::metadata(dir.path("catmull.png")).unwrap().len() > 100);
     hand_to_validators(
         &dir.path("catmull.usda"),
         "guides_catmull_rom",
@@ -303,4 +314,76 @@ what = "rest"
         "the perm set no curl: {coarse_sharpest:.1}"
     );
     eprintln!("perm render hair at 5 mm: sharpest corner {sharpest:.1} deg (simulated polylines {coarse_sharpest:.1} deg)");
+}
+
+/// Runs groombake with `args` and returns its peak resident memory in kB:
+/// `VmHWM` of its own address space, read from /proc while it runs (the
+/// high-water mark only grows; `ru_maxrss` would count the test process,
+/// whose address space the child shares until it execs).
+fn peak_memory_kb(dir: &TestDir, args: &[&str]) -> u64 {
+    let mut child = dir.command().args(args).spawn().expect("run groombake");
+    let status_file = format!("/proc/{}/status", child.id());
+    let mut peak = 0u64;
+    loop {
+        if let Ok(status) = std::fs::read_to_string(&status_file) {
+            let hwm = status
+                .lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok());
+            peak = peak.max(hwm.unwrap_or(0));
+        }
+        if let Some(status) = child.try_wait().expect("wait") {
+            assert!(status.success(), "groombake {args:?} failed");
+            return peak;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+/// A reduced full head (samples/full_head.toml takes minutes): render hair
+/// streamed to an animated Alembic, 24 and then 96 frames. The peak memory
+/// must not grow with the frame count (each frame is interpolated, written
+/// and dropped).
+#[test]
+fn streamed_render_hair_memory_is_flat_in_frame_count() {
+    let dir = TestDir::new();
+    let mut peaks = Vec::new();
+    for frames in [24, 96] {
+        let duration = (frames - 1) as f64 / 96.0 + 0.005;
+        let timeline = format!(
+            r#"
+seed = 1
+[groom]
+generate = {{ layout = "scalp", strands = 100, length = 0.21, segment_length = 0.03, scalp_angle = 95.0, drape = 10.0 }}
+render = {{ count = 10000, seed = 1 }}
+[solver]
+quaternion_mass_scale = 0.1
+[[stage]]
+kind = "settle"
+duration = {duration}
+[[export]]
+path = "anim_{frames}.abc"
+what = "animated"
+fps = 96
+"#
+        );
+        let name = format!("t{frames}.toml");
+        std::fs::write(dir.path(&name), timeline).unwrap();
+        peaks.push(peak_memory_kb(&dir, &["bake", &name, "-q"]));
+        let anim = read(&dir.path(&format!("anim_{frames}.abc")));
+        assert_eq!(anim.frames.len(), frames);
+        assert_eq!(anim.strand_count(), 10100);
+    }
+    // One frame of the export is 10,100 x 8 points x 12 bytes = 0.97 MB:
+    // holding the 72 extra frames would add 70 MB.
+    eprintln!(
+        "peak memory: 24 frames {} kB, 96 frames {} kB",
+        peaks[0], peaks[1]
+    );
+    assert!(
+        peaks[1] < peaks[0] + 4 * 1024,
+        "peak memory grew from {} kB to {} kB",
+        peaks[0],
+        peaks[1]
+    );
 }
