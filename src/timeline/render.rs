@@ -141,6 +141,16 @@ pub fn check_export(timeline: &Timeline, e: &ExportSpec) -> Result<(), TimelineE
             ));
         }
     }
+    if let Some(c) = &e.curves {
+        let extension = importers::extension_of(std::path::Path::new(e.path.get_ref()));
+        let cubic = c.get_ref() != "linear";
+        if cubic && !matches!(extension.as_str(), "usda" | "usdc" | "usd" | "abc") {
+            return Err(timeline.error_at(
+                c.span(),
+                format!("'.{extension}' holds polylines only: use `resample` (cubic curves go to USD and Alembic)"),
+            ));
+        }
+    }
     if let (Some(span), ExportWhat::State) = (reshaped, e.what) {
         return Err(timeline.error_at(
             span,

@@ -96,6 +96,10 @@ what = "rest"
 path = "anim.abc"
 what = "animated"
 fps = 20
+[[export]]
+path = "final.glb"
+what = "final"
+resample = 0.01
 "#;
     let timeline = render_timeline(
         40,
@@ -157,7 +161,7 @@ fps = 20
         render_timeline(
             40,
             r#"render = { count = 400, seed = 5, clump = 0.2, noise = 0.001 }"#,
-            &exports.replace(".abc", "_2.abc"),
+            &exports.replace(".abc", "_2.abc").replace(".glb", "_2.glb"),
         ),
     )
     .unwrap();
@@ -165,6 +169,15 @@ fps = 20
     assert_eq!(
         std::fs::read(dir.path("final.abc")).unwrap(),
         std::fs::read(dir.path("final_2.abc")).unwrap()
+    );
+    let glb = read(&dir.path("final.glb"));
+    assert_eq!(glb.strand_count(), 440);
+    assert_eq!(guide_count(&glb), 40);
+    hand_to_validators(&dir.path("final.glb"), "guides_grown_final", json!({}));
+    hand_to_validators(
+        &dir.path("final.abc"),
+        "guides_grown_final",
+        json!({"kind": "abc", "curves": 440, "unreal_groom": true, "guides": 40}),
     );
     hand_to_validators(
         &dir.path("anim.abc"),
@@ -258,6 +271,21 @@ curves = "bspline"
     std::fs::write(dir.path("bad.toml"), bad).unwrap();
     let e = dir.run_fail(&["validate", "bad.toml"], 2);
     assert!(e.contains("state export"), "{e}");
+    let bad = render_timeline(
+        10,
+        "",
+        "[[export]]\npath = \"x.glb\"\nwhat = \"final\"\ncurves = \"catmull_rom\"\n",
+    );
+    std::fs::write(dir.path("bad.toml"), bad).unwrap();
+    let e = dir.run_fail(&["validate", "bad.toml"], 2);
+    assert!(e.contains("polylines only"), "{e}");
+    let bad = render_timeline(10, "render = { count = 0 }", "");
+    std::fs::write(dir.path("bad.toml"), bad).unwrap();
+    let e = dir.run_fail(&["validate", "bad.toml"], 2);
+    assert!(
+        e.contains("bad.toml:5:") && e.contains("render count"),
+        "{e}"
+    );
 }
 
 /// Angles (degrees) between consecutive segments of every strand.
