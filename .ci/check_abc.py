@@ -19,6 +19,10 @@ must hold; its keys, all optional:
   basis         "linear" or a cubic basis name ("bezier", "bspline", ...)
   width         scope of the widths: "vertex", "uniform" or "constant"
   unreal_groom  true: Unreal's groom attributes must be in .arbGeomParams
+  guides        number of curves with groom_guide = 1 (guides and render
+                hair); the render curves must then carry
+                groom_closest_guides (int32[3]) and groom_guide_weights
+                (float[3]) per curve, weights summing to 1, ids naming guides
   kind          "abc" (ignored: says which validator the file is for)
   scaled        {"of": "other.abc", "by": k}: every point (sample 0) is the
                 other file's point times k, to 1e-6 relative (the units
@@ -134,6 +138,49 @@ def check_curves(obj, file_name, failures, totals):
     if arbitrary.valid():
         names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
     totals["arbitrary"].append(names)
+    if "groom_guide" in names:
+        count_guides(arbitrary, len(counts), where, failures, totals)
+
+
+def int_values(arbitrary, name):
+    param = AbcGeom.IInt32GeomParam(arbitrary, name)
+    return param, list(param.getExpandedValue(Abc.ISampleSelector(0)).getVals())
+
+
+def count_guides(arbitrary, curves, where, failures, totals):
+    """Guides and render curves of Unreal's split, with their links."""
+    _, flags = int_values(arbitrary, "groom_guide")
+    if len(flags) != curves:
+        failures.add(where, f"groom_guide has {len(flags)} values for {curves} curves")
+        return
+    guides = [i for i, f in enumerate(flags) if f]
+    totals["guides"] += len(guides)
+    if len(guides) in (0, curves):
+        return
+    names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
+    if not {"groom_closest_guides", "groom_guide_weights", "groom_id"} <= names:
+        failures.add(where, "render curves without groom_closest_guides / groom_guide_weights / groom_id")
+        return
+    param, closest = int_values(arbitrary, "groom_closest_guides")
+    weights_param = AbcGeom.IFloatGeomParam(arbitrary, "groom_guide_weights")
+    weights = list(weights_param.getExpandedValue(Abc.ISampleSelector(0)).getVals())
+    _, ids = int_values(arbitrary, "groom_id")
+    if param.getArrayExtent() != 3 or weights_param.getArrayExtent() != 3:
+        failures.add(where, "groom_closest_guides / groom_guide_weights are not of array extent 3")
+        return
+    if len(closest) != 3 * curves or len(weights) != 3 * curves:
+        failures.add(where, f"{len(closest)} closest guides, {len(weights)} weights for {curves} curves")
+        return
+    guide_ids = {ids[i] for i in guides}
+    for c in range(curves):
+        if flags[c]:
+            continue
+        if any(closest[3 * c + k] not in guide_ids for k in range(3)):
+            failures.add(where, f"curve {c}: closest guides {closest[3 * c:3 * c + 3]} are not guide ids")
+            return
+        if abs(sum(weights[3 * c:3 * c + 3]) - 1.0) > 1e-4:
+            failures.add(where, f"curve {c}: guide weights {weights[3 * c:3 * c + 3]} do not sum to 1")
+            return
 
 
 def sample_zero_positions(path):
@@ -184,6 +231,7 @@ def check_file(path, failures):
         "width": set(),
         "arbitrary": [],
         "positions": [],
+        "guides": 0,
     }
     paths = set()
     curves_objects = 0
@@ -236,6 +284,10 @@ def check_file(path, failures):
         "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
         "unreal_groom", "scaled",
     }
+    if "guides" in expect and expect["guides"] != totals["guides"]:
+        failures.add(name, f"guides: expected {expect['guides']}, found {totals['guides']}")
+    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom",
+             "guides"}
     unknown = set(expect) - known
     if unknown:
         failures.add(name, f"unknown expectation keys {sorted(unknown)}")

@@ -8,6 +8,9 @@
 
 mod atomic;
 mod attributes;
+pub mod curves;
+pub mod guides;
+pub mod interpolate;
 mod units;
 mod validate;
 

@@ -286,6 +286,7 @@ pub struct SheetEntry<'a> {
 
 /// Draws a groom.
 pub fn render(groom: &Groom, options: &PreviewOptions) -> Result<Image, PreviewError> {
+    let groom = &*smooth(groom);
     let entry = SheetEntry {
         label: "",
         groom,
@@ -296,6 +297,12 @@ pub fn render(groom: &Groom, options: &PreviewOptions) -> Result<Image, PreviewE
     scene.draw(&entry)
 }
 
+/// Cubic curves (Catmull-Rom, B-spline) drawn as the smooth curves they
+/// are: 8 points per span.
+fn smooth(groom: &Groom) -> std::borrow::Cow<'_, Groom> {
+    groom::curves::tessellate(groom, 8)
+}
+
 /// Draws several poses (of one groom or several) with one camera and one
 /// colour range, so they compare, and lays them out with their labels.
 pub fn render_sheet(
@@ -303,6 +310,14 @@ pub fn render_sheet(
     options: &PreviewOptions,
 ) -> Result<Image, PreviewError> {
     check_sheet_size(entries.len(), options.width, options.height)?;
+    let smoothed: Vec<std::borrow::Cow<'_, Groom>> =
+        entries.iter().map(|e| smooth(e.groom)).collect();
+    let entries: Vec<SheetEntry> = entries
+        .iter()
+        .zip(&smoothed)
+        .map(|(e, groom)| SheetEntry { groom, ..*e })
+        .collect();
+    let entries = &entries[..];
     let scene = Scene::new(entries, options)?;
     let pictures = entries
         .iter()

@@ -121,7 +121,10 @@ impl BakeError {
 
 /// Everything a bake starts from, prepared (and so checked) before any step.
 pub struct Prepared {
+    /// The simulated strands (the guides, when there is render hair).
     pub groom: Groom,
+    /// Render strands that follow the guides (see [`super::render`]).
+    pub render: Option<groom::interpolate::RenderHair>,
     pub strands: StrandSet,
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
@@ -265,7 +268,8 @@ pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
 /// Imports the groom, builds the strands and colliders. Everything that can
 /// be wrong with the inputs shows here, before the first step.
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
-    let groom = load_groom(timeline)?;
+    let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
+    let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
     let material = material_of(timeline);
     // A groom written by a `state` export continues where it stopped; any
     // other starts fresh (bond rates and wetness taken where present).
@@ -286,10 +290,11 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     check_preview_color(timeline, &groom)?;
     Ok(Prepared {
         groom,
+        render,
         strands,
         colliders,
         parameters,
-        seed: seed_override.or(timeline.file.seed).unwrap_or(0),
+        seed,
     })
 }
 
@@ -381,6 +386,7 @@ pub fn plan_outputs(timeline: &Timeline, options: &BakeOptions) -> Result<Vec<Pa
 /// An animated export under way.
 struct AnimatedExport {
     index: usize,
+    delivery: super::render::Delivery,
     writer: Box<dyn exporters::FrameWriter>,
     fps: f64,
     frames_written: usize,
@@ -449,6 +455,14 @@ pub fn sheet_options(
         options.color_by = p.color.as_ref().map(|c| c.get_ref().clone());
     }
     options
+}
+
+/// The curve form of the sheet's pictures: `[preview] resample`, if given.
+fn sheet_curve_form(timeline: &Timeline) -> groom::curves::CurveForm {
+    match timeline.file.preview.as_ref().and_then(|p| p.resample) {
+        Some(segment) => groom::curves::CurveForm::Resampled { segment },
+        None => groom::curves::CurveForm::Polyline,
+    }
 }
 
 /// Renders the before/after sheet of a bake and writes it as a PNG.
@@ -589,6 +603,8 @@ struct BakeRun<'a> {
     options: &'a BakeOptions,
     started: Instant,
     groom: Groom,
+    /// Render strands that follow the simulated guides, if any.
+    render: Option<groom::interpolate::RenderHair>,
     strands: StrandSet,
     colliders: ColliderSet,
     parameters: SolverParameters,
@@ -634,6 +650,7 @@ impl<'a> BakeRun<'a> {
         let finals = plan_outputs(timeline, options)?;
         let Prepared {
             groom,
+            render,
             strands,
             colliders,
             parameters,
@@ -681,6 +698,7 @@ impl<'a> BakeRun<'a> {
             options,
             started,
             groom,
+            render,
             strands,
             colliders,
             parameters,
@@ -719,7 +737,13 @@ impl<'a> BakeRun<'a> {
             let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
             let frame_count = (self.total_time * fps + 1e-6).floor() as usize + 1;
             let (units, up) = export_units(self.timeline, index);
-            let mut base = self.groom_now(false);
+            let guides = self.groom_now(false);
+            let delivery = super::render::Delivery::new(
+                self.render.as_ref(),
+                &guides,
+                super::render::curve_form(e),
+            );
+            let mut base = delivery.groom(self.render.as_ref(), &guides);
             base.convert_to(units, up);
             let writer = exporters::animated(
                 &self.staged[index],
@@ -728,6 +752,7 @@ impl<'a> BakeRun<'a> {
             )?;
             self.animated.push(AnimatedExport {
                 index,
+                delivery,
                 writer,
                 fps,
                 frames_written: 0,
@@ -749,7 +774,9 @@ impl<'a> BakeRun<'a> {
                 if due > self.step_index {
                     break;
                 }
-                let mut points = self.strands.positions().to_vec();
+                let mut points = a
+                    .delivery
+                    .points(self.render.as_ref(), self.strands.positions());
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let frame = Frame {
                     time: k as f64 / a.fps,
@@ -772,8 +799,15 @@ impl<'a> BakeRun<'a> {
         )
     }
 
+    /// Keeps the delivered pose (render hair in the sheet's curve form)
+    /// for the contact sheet.
     fn snapshot(&mut self, label: String) {
-        let groom = self.groom_now(false);
+        let guides = self.groom_now(false);
+        let groom = super::render::deliver(
+            self.render.as_ref(),
+            &guides,
+            sheet_curve_form(self.timeline),
+        );
         self.snapshots.push((label, groom));
     }
 
@@ -990,6 +1024,11 @@ impl<'a> BakeRun<'a> {
                     ExportWhat::State => self.groom_now(true),
                     ExportWhat::Animated => continue,
                 };
+                out = super::render::deliver(
+                    self.render.as_ref(),
+                    &out,
+                    super::render::curve_form(e),
+                );
                 out.convert_to(units, up);
                 exporters::write(staged, &out)?;
             }

@@ -5,6 +5,7 @@
 pub mod bake;
 pub mod motion;
 pub mod outputs;
+pub mod render;
 pub mod report;
 pub mod schema;
 pub mod stages;
@@ -203,6 +204,7 @@ impl Timeline {
         if !f.groom.translate.iter().all(|c| c.is_finite()) {
             return fail(0..0, "[groom] translate must be finite".into());
         }
+        render::check_groom(self)?;
 
         // Material.
         let m = &f.material;
@@ -378,6 +380,7 @@ impl Timeline {
                     return fail(up.span(), message);
                 }
             }
+            render::check_export(self, e)?;
         }
         if let Some(preview) = &f.preview {
             let path = Path::new(preview.sheet.get_ref());

@@ -45,6 +45,9 @@ pub struct PreviewSpec {
     /// view that shows most of the change from before to after the bake.
     #[serde(default = "default_preview_view")]
     pub view: Spanned<String>,
+    /// Draw the strands resampled along their smooth curves, a point every
+    /// this many metres (as an export's `resample`).
+    pub resample: Option<f32>,
 }
 
 fn default_preview_size() -> Spanned<[u32; 2]> {
@@ -79,6 +82,11 @@ pub struct GroomSpec {
     /// same keys so it moves along.
     #[serde(default = "no_motion")]
     pub motion: Spanned<Vec<KeySpec>>,
+    /// Picks guides from a dense source groom; the other strands become
+    /// render strands that follow them.
+    pub guides: Option<Spanned<super::render::GuidesSpec>>,
+    /// Grows render strands between the guides.
+    pub render: Option<Spanned<super::render::RenderSpec>>,
 }
 
 /// Bond influences `f_j` (fractions of the restoring force).
@@ -457,4 +465,9 @@ pub struct ExportSpec {
     pub units: Option<Spanned<String>>,
     /// Up axis of the file (default y).
     pub up: Option<Spanned<String>>,
+    /// Resample every strand to a polyline with a point every this many
+    /// metres along the smooth curve through its points.
+    pub resample: Option<Spanned<f32>>,
+    /// Write cubic curves: `catmull_rom` or `bspline` (default: polylines).
+    pub curves: Option<Spanned<String>>,
 }

@@ -14,6 +14,7 @@ mod cli;
 mod diff;
 mod formats;
 mod golden;
+mod guides;
 mod inspect;
 mod install;
 mod preview;

@@ -137,6 +137,41 @@ fn geom_param_metadata(scope: &str, pod: Pod, extent: u8) -> String {
     ])
 }
 
+/// Unreal's per-strand triples: the ids of the three closest guides
+/// (int32) and their weights (float32), written as the Alembic library
+/// writes a geometry parameter of array extent 3 (three scalars per curve),
+/// which is how Unreal's importer reads them.
+fn unreal_triple(name: &str, values: &AttributeValues) -> Option<(Pod, Vec<u8>)> {
+    let AttributeValues::Vec3(v) = values else {
+        return None;
+    };
+    match name {
+        groom::guides::GROOM_CLOSEST_GUIDES => Some((
+            Pod::I32,
+            v.iter()
+                .flatten()
+                .flat_map(|&x| (x.round() as i32).to_le_bytes())
+                .collect(),
+        )),
+        groom::guides::GROOM_GUIDE_WEIGHTS => {
+            Some((Pod::F32, f32_bytes(v.iter().flatten().copied())))
+        }
+        _ => None,
+    }
+}
+
+/// Metadata of a geometry parameter of three scalars per element.
+fn triple_metadata(scope: &str, pod: Pod) -> String {
+    metadata(&[
+        ("arrayExtent", "3"),
+        ("geoScope", scope),
+        ("interpretation", ""),
+        ("isGeomParam", "true"),
+        ("podExtent", "1"),
+        ("podName", pod.name()),
+    ])
+}
+
 /// Property names may not contain '/' or be empty.
 fn property_name(name: &str) -> String {
     let cleaned: String = name
@@ -339,15 +374,15 @@ impl CurvesExport {
         }
         let mut open = Vec::new();
         for (name, scope, values) in params {
-            let (pod, extent, bytes) = values_bytes(&values);
-            let mut property = PropertyWriter::new(
-                &name,
-                geom_param_metadata(scope, pod, extent),
-                PropertyKind::Array,
-                pod,
-                extent,
-                sampling,
-            );
+            let (pod, extent, bytes, metadata) = match unreal_triple(&name, &values) {
+                Some((pod, bytes)) => (pod, 1, bytes, triple_metadata(scope, pod)),
+                None => {
+                    let (pod, extent, bytes) = values_bytes(&values);
+                    (pod, extent, bytes, geom_param_metadata(scope, pod, extent))
+                }
+            };
+            let mut property =
+                PropertyWriter::new(&name, metadata, PropertyKind::Array, pod, extent, sampling);
             property.set_sample(archive, &bytes)?;
             open.push(property);
         }

@@ -544,7 +544,17 @@ impl SceneReader<'_, '_> {
                 .push(format!("skipped {}: string values", property.path));
             return Ok(None);
         }
-        let extent = usize::from(values_property.extent);
+        let mut extent = usize::from(values_property.extent);
+        // Arrays of several scalars per element (Unreal's
+        // groom_closest_guides, int32[3]) say so in `arrayExtent`.
+        let array_extent = property
+            .metadata
+            .get("arrayExtent")
+            .and_then(|e| e.parse::<usize>().ok())
+            .unwrap_or(1);
+        if extent == 1 && (2..=3).contains(&array_extent) {
+            extent = array_extent;
+        }
         if extent > 3 {
             self.notes.push(format!(
                 "skipped {}: {extent} components per value",
