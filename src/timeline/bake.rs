@@ -674,7 +674,7 @@ fn bake_in_pool(
         let (units, _) = export_units(timeline, index);
         report
             .warnings
-            .extend(exporters::units_warning(&path, units));
+            .extend(exporters::warnings(&path, &groom, units));
         let what = format!("{:?}", e.what).to_lowercase();
         report
             .outputs

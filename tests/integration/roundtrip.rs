@@ -305,11 +305,15 @@ fn unrecordable_units_warn_and_strict_refuses() {
     exporters::write(&dir.path("in.usda"), &test_groom()).unwrap();
     let output = dir.run_ok(&["convert", "in.usda", "m.hair", "--units", "m"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    // One line per kind: the units, and root_uv, which .hair cannot hold.
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 2, "{stderr}");
     assert!(
-        stderr.contains("warning:") && stderr.contains("--source-units m"),
+        lines.iter().all(|l| l.starts_with("groombake: warning: ")),
         "{stderr}"
     );
+    assert!(lines[0].contains("--source-units m"), "{stderr}");
+    assert!(lines[1].contains("root_uv: dropped"), "{stderr}");
     let message = dir.run_fail(
         &[
             "convert",
@@ -323,7 +327,11 @@ fn unrecordable_units_warn_and_strict_refuses() {
     );
     assert!(message.contains("--strict"), "{message}");
     assert!(!dir.path("strict.hair").exists());
-    // The default (centimetres) needs no warning.
+    // The default (centimetres) needs no units warning.
     let output = dir.run_ok(&["convert", "in.usda", "cm.hair"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("--source-units"), "{stderr}");
+    // A file that can hold it all needs no warning at all.
+    let output = dir.run_ok(&["convert", "in.usda", "same.usdc", "--strict"]);
     assert!(output.stderr.is_empty());
 }

@@ -231,6 +231,17 @@ fn blender_usda_imports_every_curve_with_its_transform() {
         assert!(names.contains(&name), "{name} in {names:?}");
     }
     dir.run_ok(&["convert", source, "blender.usdc"]);
+    // Blender's pinned catmullRom hair and linear poly curve stay apart.
+    let back = importers::read(&dir.path("blender.usdc")).unwrap();
+    let codes = |name: &str| back.attribute(name).map(|a| a.values.clone());
+    assert_eq!(
+        codes("curve_basis"),
+        Some(AttributeValues::Int(vec![3, 3, 3, 0, 0]))
+    );
+    assert_eq!(
+        codes("curve_wrap"),
+        Some(AttributeValues::Int(vec![2, 2, 2, 0, 0]))
+    );
     hand_to_validators(
         &dir.path("blender.usdc"),
         "usd_blender_converted_usdc",
@@ -240,10 +251,9 @@ fn blender_usda_imports_every_curve_with_its_transform() {
             "first_point": [0.0, 0.0, 1.0],
             "meters_per_unit": 1.0,
             "up_axis": "Z",
-            "basis": "catmullRom",
             "time_samples": 0,
             "widths": "vertex",
-            "primvars": {"tilt": "vertex", "group_id": "uniform", "curve_basis": "uniform"},
+            "primvars": {"tilt": "vertex", "group_id": "uniform"},
         }),
     );
 }
@@ -434,6 +444,20 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
             && text.contains("texCoord2f[] primvars:st"),
         "{text}"
     );
+    // Mixed curve types: one prim per type, each keeping its own.
+    let text = std::fs::read_to_string(dir.path("mixed_types.usda")).unwrap();
+    assert!(
+        text.contains("def BasisCurves \"Strands_linear\"")
+            && text.contains("def BasisCurves \"Strands_catmullRom\"")
+            && text.contains("uniform token type = \"linear\"")
+            && text.contains("uniform token basis = \"catmullRom\""),
+        "{text}"
+    );
+    for ext in ["usda", "usdc"] {
+        let back = importers::read(&dir.path(&format!("mixed_types.{ext}"))).unwrap();
+        let bases = back.attribute("curve_basis").map(|a| a.values.clone());
+        assert_eq!(bases, Some(AttributeValues::Int(vec![0, 3, 3])), "{ext}");
+    }
     let back = importers::read(&dir.path("color3f.usdc")).unwrap();
     assert_eq!(
         back.provenance

@@ -899,6 +899,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
     let mut basis_codes = Vec::new();
+    let mut wrap_codes = Vec::new();
     let mut notes = stage.notes.clone();
     for (group, (path, set)) in sets.into_iter().enumerate() {
         let vertices_before = groom.points.len();
@@ -956,6 +957,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         }
         group_ids.extend(std::iter::repeat_n(group as i32, set.counts.len()));
         basis_codes.extend(std::iter::repeat_n(basis_code(set.basis), set.counts.len()));
+        wrap_codes.extend(std::iter::repeat_n(wrap_code(&set.wrap), set.counts.len()));
         for (index, frame) in groom.frames.iter_mut().enumerate() {
             match set.samples.get(index) {
                 Some((_, points)) => frame.points.extend_from_slice(points),
@@ -992,8 +994,31 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         ));
         notes.push("curves of several bases: per-strand basis in 'curve_basis' (0 linear, 1 bezier, 2 bspline, 3 catmullRom)".into());
     }
+    if groom
+        .provenance
+        .metadata
+        .get("usd.wrap")
+        .map(String::as_str)
+        == Some("mixed")
+    {
+        groom.set_attribute(Attribute::per_strand(
+            "curve_wrap",
+            AttributeValues::Int(wrap_codes),
+        ));
+        notes.push("curves of several wraps: per-strand wrap in 'curve_wrap' (0 nonperiodic, 1 periodic, 2 pinned)".into());
+    }
     groom.provenance.info = notes.join("; ");
     Ok(groom)
+}
+
+/// Index of a wrap in the per-strand `curve_wrap` attribute of grooms that
+/// mix wraps.
+fn wrap_code(wrap: &str) -> i32 {
+    match wrap {
+        "periodic" => 1,
+        "pinned" => 2,
+        _ => 0,
+    }
 }
 
 #[cfg(test)]
