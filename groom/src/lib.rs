@@ -45,6 +45,11 @@ impl CurveBasis {
     }
 }
 
+/// The `Provenance::metadata` key where a reader lists the curves objects
+/// it read, one per line: the object's (composed) path, a space, its strand
+/// count.
+pub const PRIMS_KEY: &str = "prims";
+
 /// Where a groom came from.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Provenance {

@@ -451,6 +451,22 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             prim.path
         ))
     })?;
+    // Time-varying topology: a groom holds one (refused with where it changes).
+    if let Some(first) = counts_attribute.static_value() {
+        let changed = counts_attribute
+            .samples
+            .iter()
+            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
+        if let Some((code, _)) = changed {
+            return Err(at(
+                counts_attribute,
+                format!(
+                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
+                     groombake reads grooms of one topology"
+                ),
+            ));
+        }
+    }
     let counts_values = counts_attribute
         .static_value()
         .and_then(|v| v.numbers(1))
@@ -895,6 +911,16 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 .or_insert_with(|| type_name.clone());
         }
     }
+
+    // Each curves prim's composed path and strand count, for `inspect`.
+    let prims: Vec<String> = sets
+        .iter()
+        .map(|(path, set)| format!("{path} {}", set.counts.len()))
+        .collect();
+    groom
+        .provenance
+        .metadata
+        .insert(groom::PRIMS_KEY.into(), prims.join("\n"));
 
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
