@@ -750,19 +750,12 @@ fn empty_like(values: &AttributeValues, len: usize) -> AttributeValues {
 
 /// Per-strand values repeated over each strand's vertices.
 fn per_vertex(values: &AttributeValues, counts: &[u32]) -> AttributeValues {
-    fn spread<T: Copy>(values: &[T], counts: &[u32]) -> Vec<T> {
-        values
-            .iter()
-            .zip(counts)
-            .flat_map(|(&v, &n)| std::iter::repeat_n(v, n as usize))
-            .collect()
-    }
-    match values {
-        AttributeValues::Float(v) => AttributeValues::Float(spread(v, counts)),
-        AttributeValues::Vec2(v) => AttributeValues::Vec2(spread(v, counts)),
-        AttributeValues::Vec3(v) => AttributeValues::Vec3(spread(v, counts)),
-        AttributeValues::Int(v) => AttributeValues::Int(spread(v, counts)),
-    }
+    let each_vertex: Vec<std::ops::Range<usize>> = counts
+        .iter()
+        .enumerate()
+        .flat_map(|(strand, &n)| std::iter::repeat_n(strand..strand + 1, n as usize))
+        .collect();
+    values.select(&each_vertex)
 }
 
 fn append(into: &mut AttributeValues, from: &AttributeValues) -> bool {
@@ -937,30 +930,21 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 Scope::Strand => strands_before,
             };
             match groom.attribute_mut(&attribute.name) {
-                Some(existing) if existing.scope == attribute.scope => {
-                    if !append(&mut existing.values, &attribute.values) {
-                        return Err(ImportError::malformed(
-                            file,
-                            Place::Path(path.clone()),
-                            format!(
-                                "primvar '{}' has another type than in an earlier curves prim",
-                                attribute.name
-                            ),
-                        ));
-                    }
-                }
                 Some(existing) => {
                     // Interpolation is per prim: where prims differ, the
                     // groom holds the attribute per vertex.
-                    if existing.scope == Scope::Strand {
+                    if existing.scope != attribute.scope && existing.scope == Scope::Strand {
                         existing.values = per_vertex(&existing.values, &earlier_counts);
                         existing.scope = Scope::Vertex;
                     }
-                    let values = match attribute.scope {
-                        Scope::Strand => per_vertex(&attribute.values, &set.counts),
-                        Scope::Vertex => attribute.values.clone(),
+                    let spread;
+                    let values = if existing.scope == attribute.scope {
+                        &attribute.values
+                    } else {
+                        spread = per_vertex(&attribute.values, &set.counts);
+                        &spread
                     };
-                    if !append(&mut existing.values, &values) {
+                    if !append(&mut existing.values, values) {
                         return Err(ImportError::malformed(
                             file,
                             Place::Path(path.clone()),
