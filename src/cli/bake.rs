@@ -27,6 +27,10 @@ pub struct BakeArgs {
     /// No progress bars.
     #[arg(short, long)]
     quiet: bool,
+    /// Fail (exit 2, before simulating) instead of warning when an export
+    /// must change anything about the data.
+    #[arg(long)]
+    strict: bool,
 }
 
 #[derive(Debug, Args)]
@@ -55,6 +59,7 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         seed: args.seed,
         progress: !args.quiet && std::io::stderr().is_terminal(),
         dry: false,
+        strict: args.strict,
     };
     let report = bake(&timeline, &options).map_err(classify)?.report;
     if let Some(path) = &args.report {

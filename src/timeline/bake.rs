@@ -29,6 +29,9 @@ pub struct BakeOptions {
     /// Run without writing the timeline's exports and sheet (a preview of
     /// the timeline keeps only the snapshots).
     pub dry: bool,
+    /// Refuse, before simulating, exports that would change the data
+    /// (`exporters::warnings`), instead of warning.
+    pub strict: bool,
 }
 
 /// What a bake leaves besides its files: the report and the groom before
@@ -369,6 +372,20 @@ fn with_frames_from_positions(
     Ok(StrandSet::from_state(&groom, material)?)
 }
 
+/// What each export must change about the groom's data, one line per kind
+/// (checked before simulating, so `--strict` refuses before any work).
+fn export_warnings(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
+    if options.dry {
+        return Vec::new();
+    }
+    (0..timeline.file.exports.len())
+        .flat_map(|index| {
+            let path = output_path(options, timeline.file.exports[index].path.get_ref());
+            exporters::warnings(&path, groom, export_units(timeline, index).0)
+        })
+        .collect()
+}
+
 fn output_path(options: &BakeOptions, path: &str) -> PathBuf {
     let p = Path::new(path);
     if p.is_absolute() {
@@ -424,6 +441,13 @@ fn bake_in_pool(
         parameters,
         seed,
     } = prepare(timeline, options.seed)?;
+    let export_warnings = export_warnings(timeline, options, &groom);
+    if let (true, Some(first)) = (options.strict, export_warnings.first()) {
+        return Err(BakeError::Input {
+            file: timeline.path.clone(),
+            message: format!("--strict: {first}"),
+        });
+    }
     let dt = timeline.dt;
     let plans: Vec<StagePlan> = timeline
         .file
@@ -511,6 +535,7 @@ fn bake_in_pool(
         threads,
         strands: strands.strand_count(),
         vertices: strands.vertex_count(),
+        warnings: export_warnings,
         ..BakeReport::default()
     };
     let mut step_index: u64 = 0;
@@ -671,10 +696,6 @@ fn bake_in_pool(
             create_parent(&path)?;
             exporters::write(&path, &out)?;
         }
-        let (units, _) = export_units(timeline, index);
-        report
-            .warnings
-            .extend(exporters::warnings(&path, &groom, units));
         let what = format!("{:?}", e.what).to_lowercase();
         report
             .outputs
