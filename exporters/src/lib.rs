@@ -162,6 +162,65 @@ pub fn units_warning(path: &Path, units: Units) -> Option<String> {
     }
 }
 
+/// One line per kind of change writing `groom` (in `units`) to `path` must
+/// make to the data: units the file cannot keep, attributes the format
+/// cannot hold, curve types or a wrap it cannot write. Empty when the file
+/// holds the groom as it is. `convert` and the bake print these (and
+/// `--strict` refuses them).
+pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
+    let extension = extension_of(path);
+    let file = path.display();
+    let mut warnings: Vec<String> = units_warning(path, units).into_iter().collect();
+    let dropped: Vec<&str> = groom
+        .attributes
+        .iter()
+        .map(|a| a.name.as_str())
+        .filter(|name| match extension.as_str() {
+            "obj" | "data" => true,
+            "hair" => !matches!(
+                (*name, groom.attribute(name).map(|a| &a.values)),
+                ("width" | "transparency", Some(AttributeValues::Float(_)))
+                    | ("color", Some(AttributeValues::Vec3(_)))
+            ),
+            _ => false,
+        })
+        .collect();
+    if !dropped.is_empty() {
+        warnings.push(format!(
+            "{file}: .{extension} cannot hold attribute(s) {}: dropped",
+            dropped.join(", ")
+        ));
+    }
+    let usd = matches!(extension.as_str(), "usda" | "usdc" | "usd");
+    let bases = groom.attribute("curve_basis").map(|a| match &a.values {
+        AttributeValues::Int(codes) => codes.iter().any(|&c| Some(&c) != codes.first()),
+        _ => false,
+    });
+    // Static USD writes one prim per curve type (usd::PrimKey).
+    let grouped = usd && groom.frames.is_empty();
+    if bases == Some(true) && !grouped {
+        warnings.push(format!(
+            "{file}: strands of several curve types (curve_basis): all written as {}",
+            groom.basis.name()
+        ));
+    }
+    let wrap = groom
+        .provenance
+        .metadata
+        .get("usd.wrap")
+        .map(String::as_str);
+    match wrap {
+        Some("mixed") if !grouped => warnings.push(format!(
+            "{file}: curves of several wraps: all written as nonperiodic"
+        )),
+        Some(wrap @ ("pinned" | "periodic")) if !usd => warnings.push(format!(
+            "{file}: wrap {wrap}: .{extension} writes nonperiodic curves"
+        )),
+        _ => {}
+    }
+    warnings
+}
+
 fn extension_of(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())

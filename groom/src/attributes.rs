@@ -18,6 +18,25 @@ pub enum AttributeValues {
 }
 
 impl AttributeValues {
+    /// The elements in `ranges`, in order (ranges past the end are cut).
+    pub fn select(&self, ranges: &[std::ops::Range<usize>]) -> AttributeValues {
+        fn pick<T: Copy>(values: &[T], ranges: &[std::ops::Range<usize>]) -> Vec<T> {
+            ranges
+                .iter()
+                .flat_map(|r| {
+                    let end = r.end.min(values.len());
+                    values[r.start.min(end)..end].iter().copied()
+                })
+                .collect()
+        }
+        match self {
+            AttributeValues::Float(v) => AttributeValues::Float(pick(v, ranges)),
+            AttributeValues::Vec2(v) => AttributeValues::Vec2(pick(v, ranges)),
+            AttributeValues::Vec3(v) => AttributeValues::Vec3(pick(v, ranges)),
+            AttributeValues::Int(v) => AttributeValues::Int(pick(v, ranges)),
+        }
+    }
+
     /// Number of elements (not components).
     pub fn len(&self) -> usize {
         match self {

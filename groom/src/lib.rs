@@ -48,6 +48,11 @@ impl CurveBasis {
     }
 }
 
+/// The `Provenance::metadata` key where a reader lists the curves objects
+/// it read, one per line: the object's (composed) path, a space, its strand
+/// count.
+pub const PRIMS_KEY: &str = "prims";
+
 /// Where a groom came from.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Provenance {
@@ -172,6 +177,60 @@ impl Groom {
             .iter()
             .chain(self.frames.iter().flat_map(|f| f.points.iter()));
         bounds_of(all)
+    }
+
+    /// The groom of only the given strands (in that order), with their
+    /// points, frames and attribute values. Indices past the last strand
+    /// are skipped.
+    pub fn select_strands(&self, strands: &[usize]) -> Groom {
+        let offsets = self.strand_offsets();
+        let ranges: Vec<std::ops::Range<usize>> = strands
+            .iter()
+            .filter(|&&s| s + 1 < offsets.len())
+            .map(|&s| offsets[s]..offsets[s + 1])
+            .collect();
+        let kept: Vec<usize> = strands
+            .iter()
+            .copied()
+            .filter(|&s| s + 1 < offsets.len())
+            .collect();
+        let pick = |points: &[[f32; 3]]| -> Vec<[f32; 3]> {
+            ranges
+                .iter()
+                .flat_map(|r| points.get(r.clone()).unwrap_or(&[]).iter().copied())
+                .collect()
+        };
+        let attributes = self
+            .attributes
+            .iter()
+            .map(|a| Attribute {
+                name: a.name.clone(),
+                scope: a.scope,
+                values: match a.scope {
+                    Scope::Vertex => a.values.select(&ranges),
+                    Scope::Strand => a
+                        .values
+                        .select(&kept.iter().map(|&s| s..s + 1).collect::<Vec<_>>()),
+                },
+            })
+            .collect();
+        Groom {
+            strand_vertex_counts: kept.iter().map(|&s| self.strand_vertex_counts[s]).collect(),
+            points: pick(&self.points),
+            attributes,
+            frames: self
+                .frames
+                .iter()
+                .map(|f| Frame {
+                    time: f.time,
+                    points: pick(&f.points),
+                })
+                .collect(),
+            units: self.units,
+            up_axis: self.up_axis,
+            basis: self.basis,
+            provenance: self.provenance.clone(),
+        }
     }
 
     /// The groom with only the pose of frame `index` as its points, no animation.

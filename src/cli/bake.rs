@@ -31,6 +31,10 @@ pub struct BakeArgs {
     /// No progress bars.
     #[arg(short, long)]
     quiet: bool,
+    /// Fail (exit 2, before simulating) instead of warning when an export
+    /// must change anything about the data.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// `--threads`: 1 to the budget's cap.
@@ -115,6 +119,7 @@ fn bake_and_report(args: &BakeArgs, report: &mut BakeReport) -> anyhow::Result<(
         monitor: None,
         report: args.report.clone(),
         interrupt: Some(interrupt),
+        strict: args.strict,
     };
     let outcome = bake(&timeline, &options).map_err(classify)?;
     let started = std::mem::take(&mut report.started);

@@ -59,9 +59,7 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| exporters::default_units(&args.output, groom.units));
     let up = args.up.unwrap_or(groom.up_axis);
     groom.convert_to(units, up);
-    let warnings: Vec<String> = exporters::units_warning(&args.output, units)
-        .into_iter()
-        .collect();
+    let warnings = exporters::warnings(&args.output, &groom, units);
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write(&args.output, &groom)?;
     Ok(())

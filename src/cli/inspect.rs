@@ -36,6 +36,9 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
         })
         .collect();
     let times: Vec<f64> = groom.frames.iter().map(|f| f.time).collect();
+    let prims: Vec<_> = prims_of(groom)
+        .map(|(path, strands)| json!({"path": path, "strands": strands}))
+        .collect();
     json!({
         "file": groom.provenance.source.as_ref().map(|p| p.display().to_string()),
         "format": groom.provenance.format,
@@ -52,8 +55,25 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
         "frames": groom.frames.len(),
         "frame_times": times,
         "attributes": attributes,
+        "prims": prims,
         "first_point": groom.points.first(),
     })
+}
+
+/// The curves objects the reader lists (`groom::PRIMS_KEY`): path and
+/// strand count.
+fn prims_of(groom: &Groom) -> impl Iterator<Item = (&str, usize)> {
+    groom
+        .provenance
+        .metadata
+        .get(groom::PRIMS_KEY)
+        .map(String::as_str)
+        .unwrap_or("")
+        .lines()
+        .filter_map(|line| {
+            let (path, count) = line.rsplit_once(' ')?;
+            Some((path, count.parse().ok()?))
+        })
 }
 
 /// Which rule of the units rule (README, "Units") gave the units, in words.
@@ -98,6 +118,9 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     writeln!(out, "frames      {}", groom.frames.len())?;
     if let (Some(first), Some(last)) = (groom.frames.first(), groom.frames.last()) {
         writeln!(out, "time        {} .. {} s", first.time, last.time)?;
+    }
+    for (path, strands) in prims_of(&groom) {
+        writeln!(out, "prim        {path} ({strands} strands)")?;
     }
     for a in &groom.attributes {
         writeln!(

@@ -41,6 +41,9 @@ pub struct BakeOptions {
     /// Set to a signal's number (by a signal handler) to stop the bake; it
     /// stops at the next step and removes its temporaries.
     pub interrupt: Option<Arc<AtomicUsize>>,
+    /// Refuse, before simulating, exports that would change the data
+    /// (`exporters::warnings`), instead of warning.
+    pub strict: bool,
 }
 
 impl BakeOptions {
@@ -546,6 +549,20 @@ fn with_frames_from_positions(
     Ok(StrandSet::from_state(&groom, material)?)
 }
 
+/// What each export must change about the groom's data, one line per kind
+/// (checked before simulating, so `--strict` refuses before any work).
+fn export_warnings(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
+    if options.dry {
+        return Vec::new();
+    }
+    (0..timeline.file.exports.len())
+        .flat_map(|index| {
+            let path = output_path(options, timeline.file.exports[index].path.get_ref());
+            exporters::warnings(&path, groom, export_units(timeline, index).0)
+        })
+        .collect()
+}
+
 fn output_path(options: &BakeOptions, path: &str) -> PathBuf {
     let p = Path::new(path);
     if p.is_absolute() {
@@ -656,6 +673,13 @@ impl<'a> BakeRun<'a> {
             parameters,
             seed,
         } = prepare(timeline, options.seed)?;
+        let export_warnings = export_warnings(timeline, options, &groom);
+        if let (true, Some(first)) = (options.strict, export_warnings.first()) {
+            return Err(BakeError::Input {
+                file: timeline.path.clone(),
+                message: format!("--strict: {first}"),
+            });
+        }
         let dt = timeline.dt;
         let plans: Vec<StagePlan> = timeline
             .file
@@ -674,6 +698,7 @@ impl<'a> BakeRun<'a> {
             threads,
             strands: strands.strand_count(),
             vertices: strands.vertex_count(),
+            warnings: export_warnings,
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
@@ -1032,10 +1057,6 @@ impl<'a> BakeRun<'a> {
                 out.convert_to(units, up);
                 exporters::write(staged, &out)?;
             }
-            let (units, _) = export_units(self.timeline, index);
-            self.report
-                .warnings
-                .extend(exporters::units_warning(path, units));
             let what = format!("{:?}", e.what).to_lowercase();
             self.report
                 .outputs

@@ -305,11 +305,15 @@ fn unrecordable_units_warn_and_strict_refuses() {
     exporters::write(&dir.path("in.usda"), &test_groom()).unwrap();
     let output = dir.run_ok(&["convert", "in.usda", "m.hair", "--units", "m"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    // One line per kind: the units, and root_uv, which .hair cannot hold.
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 2, "{stderr}");
     assert!(
-        stderr.contains("warning:") && stderr.contains("--source-units m"),
+        lines.iter().all(|l| l.starts_with("groombake: warning: ")),
         "{stderr}"
     );
+    assert!(lines[0].contains("--source-units m"), "{stderr}");
+    assert!(lines[1].contains("root_uv: dropped"), "{stderr}");
     let message = dir.run_fail(
         &[
             "convert",
@@ -323,7 +327,66 @@ fn unrecordable_units_warn_and_strict_refuses() {
     );
     assert!(message.contains("--strict"), "{message}");
     assert!(!dir.path("strict.hair").exists());
-    // The default (centimetres) needs no warning.
+    // The default (centimetres) needs no units warning.
     let output = dir.run_ok(&["convert", "in.usda", "cm.hair"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!stderr.contains("--source-units"), "{stderr}");
+    // A file that can hold it all needs no warning at all.
+    let output = dir.run_ok(&["convert", "in.usda", "same.usdc", "--strict"]);
     assert!(output.stderr.is_empty());
+}
+
+/// A bake's static export in units its format cannot record warns in the
+/// report (and on stderr); `bake --strict` refuses before simulating and
+/// writes nothing. A `.hair` export by default is centimetres and reads back
+/// as the bake's groom, with no warning.
+#[test]
+fn bake_exports_follow_the_units_rule_and_strict_refuses() {
+    let dir = TestDir::new();
+    let timeline = r#"
+seed = 1
+[groom]
+generate = { layout = "swatch", strands = 2, length = 0.06, segment_length = 0.02, swatch_width = 0.02, head_center = [0.0, 0.30, 0.0] }
+[[stage]]
+kind = "settle"
+duration = 0.01
+[[export]]
+path = "final.hair"
+what = "final"
+[[export]]
+path = "final_m.data"
+what = "final"
+units = "m"
+[[export]]
+path = "final.usda"
+what = "final"
+"#;
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    let message = dir.run_fail(&["bake", "t.toml", "--strict", "-q"], 2);
+    assert!(message.contains("t.toml: --strict: "), "{message}");
+    assert!(!dir.path("final.hair").exists() && !dir.path("final.usda").exists());
+
+    dir.run_ok(&["bake", "t.toml", "-q", "--report", "report.json"]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("report.json")).unwrap()).unwrap();
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("--source-units m")),
+        "{report}"
+    );
+    assert!(
+        !warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("final.hair: written")),
+        "{report}"
+    );
+    // The .hair (cm by default) and the .usda (metres) hold the same groom.
+    let hair = normalised(&importers::read(&dir.path("final.hair")).unwrap());
+    let usd = normalised(&importers::read(&dir.path("final.usda")).unwrap());
+    assert_eq!(hair.units, usd.units);
+    for (a, b) in hair.points.iter().zip(&usd.points) {
+        assert!((0..3).all(|k| close(a[k], b[k], 1.0)), "{a:?} vs {b:?}");
+    }
 }

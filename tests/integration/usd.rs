@@ -231,6 +231,17 @@ fn blender_usda_imports_every_curve_with_its_transform() {
         assert!(names.contains(&name), "{name} in {names:?}");
     }
     dir.run_ok(&["convert", source, "blender.usdc"]);
+    // Blender's pinned catmullRom hair and linear poly curve stay apart.
+    let back = importers::read(&dir.path("blender.usdc")).unwrap();
+    let codes = |name: &str| back.attribute(name).map(|a| a.values.clone());
+    assert_eq!(
+        codes("curve_basis"),
+        Some(AttributeValues::Int(vec![3, 3, 3, 0, 0]))
+    );
+    assert_eq!(
+        codes("curve_wrap"),
+        Some(AttributeValues::Int(vec![2, 2, 2, 0, 0]))
+    );
     hand_to_validators(
         &dir.path("blender.usdc"),
         "usd_blender_converted_usdc",
@@ -240,10 +251,9 @@ fn blender_usda_imports_every_curve_with_its_transform() {
             "first_point": [0.0, 0.0, 1.0],
             "meters_per_unit": 1.0,
             "up_axis": "Z",
-            "basis": "catmullRom",
             "time_samples": 0,
             "widths": "vertex",
-            "primvars": {"tilt": "vertex", "group_id": "uniform", "curve_basis": "uniform"},
+            "primvars": {"tilt": "vertex", "group_id": "uniform"},
         }),
     );
 }
@@ -329,7 +339,7 @@ fn usd_core_file_converts_to_valid_usd() {
 /// strand and vertex counts usd-core composes for them (instance proxies
 /// included). What groombake reads of each (counts and world points) goes to
 /// `.ci/check_usd_fixtures.py`, which compares it with usd-core's reading.
-const COMPOSED_FIXTURES: [(&str, &[u32]); 9] = [
+const COMPOSED_FIXTURES: [(&str, &[u32]); 10] = [
     ("reference_internal.usda", &[3, 2, 3, 2]),
     ("payload_main.usda", &[4, 3, 4, 3]),
     ("sublayer_main.usda", &[2, 2]),
@@ -339,12 +349,40 @@ const COMPOSED_FIXTURES: [(&str, &[u32]); 9] = [
     ("pinned_wrap.usda", &[4, 5]),
     ("constant_widths.usda", &[3, 2]),
     ("color3f.usda", &[2, 3]),
+    ("legacy_pointfloat.usda", &[2, 3]),
 ];
 
 fn usd_fixture(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/usd")
         .join(name)
+}
+
+/// `inspect` names each composed curves prim: instances by the path of the
+/// instance, references by the prim they land on.
+#[test]
+fn inspect_lists_composed_prim_paths() {
+    let dir = TestDir::new();
+    for (name, expected) in [
+        (
+            "instancing.usda",
+            json!([
+                {"path": "/Prototypes/Tuft/Curves", "strands": 1},
+                {"path": "/Tufts/A/Curves", "strands": 1},
+                {"path": "/Tufts/B/Curves", "strands": 1},
+            ]),
+        ),
+        (
+            "payload_main.usda",
+            json!([
+                {"path": "/Character/Head/Strands", "strands": 2},
+                {"path": "/Character/Beard", "strands": 2},
+            ]),
+        ),
+    ] {
+        let summary = dir.inspect(usd_fixture(name).to_str().unwrap());
+        assert_eq!(summary["prims"], expected, "{name}");
+    }
 }
 
 #[test]
@@ -434,6 +472,20 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
             && text.contains("texCoord2f[] primvars:st"),
         "{text}"
     );
+    // Mixed curve types: one prim per type, each keeping its own.
+    let text = std::fs::read_to_string(dir.path("mixed_types.usda")).unwrap();
+    assert!(
+        text.contains("def BasisCurves \"Strands_linear\"")
+            && text.contains("def BasisCurves \"Strands_catmullRom\"")
+            && text.contains("uniform token type = \"linear\"")
+            && text.contains("uniform token basis = \"catmullRom\""),
+        "{text}"
+    );
+    for ext in ["usda", "usdc"] {
+        let back = importers::read(&dir.path(&format!("mixed_types.{ext}"))).unwrap();
+        let bases = back.attribute("curve_basis").map(|a| a.values.clone());
+        assert_eq!(bases, Some(AttributeValues::Int(vec![0, 3, 3])), "{ext}");
+    }
     let back = importers::read(&dir.path("color3f.usdc")).unwrap();
     assert_eq!(
         back.provenance
@@ -441,5 +493,19 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
             .get("usd.type.displayColor")
             .map(String::as_str),
         Some("color3f[]")
+    );
+}
+
+/// Time-sampled curve counts that change are refused with the time they
+/// change at (not a mismatch of points and counts), before any simulation.
+#[test]
+fn time_varying_topology_is_refused_naming_the_time() {
+    let dir = TestDir::new();
+    let source = usd_fixture("time_sampled_counts.usda");
+    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    assert!(
+        message.contains("time_sampled_counts.usda:13:")
+            && message.contains("topology changes at time 2"),
+        "{message}"
     );
 }

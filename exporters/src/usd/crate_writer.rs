@@ -66,9 +66,15 @@ fn inlined(type_id: u8, payload: u64) -> u64 {
     value_rep(type_id, false, true, payload)
 }
 
-pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
-    let writer = CrateWriter::create(path, scene)?;
-    writer.finish(scene, None)
+/// Writes the curves prims `scenes` (name and scene; the first gives the
+/// stage metadata) under the root.
+pub(super) fn write_static(
+    path: &Path,
+    scenes: &[(String, CurvesScene)],
+) -> Result<(), ExportError> {
+    let prims: Vec<(&str, &CurvesScene)> = scenes.iter().map(|(n, s)| (n.as_str(), s)).collect();
+    let writer = CrateWriter::create(path, &prims)?;
+    writer.finish(&prims, None)
 }
 
 /// The time samples of `points` and `extent`, one rep of each per frame.
@@ -83,13 +89,13 @@ struct CrateWriter {
     path: PathBuf,
     file: AtomicFile,
     position: u64,
-    /// Rep of each property's default value, by property name.
-    defaults: BTreeMap<String, u64>,
+    /// Rep of each property's default value, by prim index and property name.
+    defaults: BTreeMap<(usize, String), u64>,
     scratch: Vec<u8>,
 }
 
 impl CrateWriter {
-    fn create(path: &Path, scene: &CurvesScene) -> Result<CrateWriter, ExportError> {
+    fn create(path: &Path, prims: &[(&str, &CurvesScene)]) -> Result<CrateWriter, ExportError> {
         let file = AtomicFile::create(path).map_err(|e| ExportError::io(path, e))?;
         let mut writer = CrateWriter {
             path: path.to_path_buf(),
@@ -100,7 +106,11 @@ impl CrateWriter {
         };
         // The bootstrap is written again with the table-of-contents offset.
         writer.write_bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
-        for property in &scene.properties {
+        for (prim, property) in prims
+            .iter()
+            .enumerate()
+            .flat_map(|(i, (_, scene))| scene.properties.iter().map(move |p| (i, p)))
+        {
             let rep = match &property.value {
                 // Tokens are inlined once their index is known, in `finish`.
                 PropertyValue::Token(_) => continue,
@@ -121,7 +131,7 @@ impl CrateWriter {
                 )?,
                 PropertyValue::Float3s(v) => writer.write_float3s(v)?,
             };
-            writer.defaults.insert(property.name.clone(), rep);
+            writer.defaults.insert((prim, property.name.clone()), rep);
         }
         Ok(writer)
     }
@@ -199,7 +209,17 @@ impl CrateWriter {
 
     /// Writes the specs, the structural sections and the table of contents,
     /// then patches the bootstrap and renames the file into place.
-    fn finish(mut self, scene: &CurvesScene, samples: Option<Samples>) -> Result<(), ExportError> {
+    fn finish(
+        mut self,
+        prims: &[(&str, &CurvesScene)],
+        samples: Option<Samples>,
+    ) -> Result<(), ExportError> {
+        let Some(&(_, scene)) = prims.first() else {
+            return Err(ExportError::Invalid {
+                file: self.path.clone(),
+                message: "no curves to write".into(),
+            });
+        };
         let mut layer = Layer::default();
         let mut strings: Vec<u32> = Vec::new();
 
@@ -242,17 +262,33 @@ impl CrateWriter {
 
         // The Xform root.
         let groom_path = layer.path(Some(root_path), ROOT_PRIM, false);
-        let curves_token = layer.token(CURVES_PRIM);
+        let curves_tokens: Vec<u32> = prims.iter().map(|(name, _)| layer.token(name)).collect();
         let xform = layer.token("Xform");
         let fields = [
             ("specifier", inlined(type_id::SPECIFIER, 0)),
             ("typeName", inlined(type_id::TOKEN, xform.into())),
-            ("primChildren", self.write_token_vector(&[curves_token])?),
+            ("primChildren", self.write_token_vector(&curves_tokens)?),
         ];
         layer.spec(groom_path, SPEC_PRIM, &fields);
 
-        // The curves prim and its properties.
-        let curves_path = layer.path(Some(groom_path), CURVES_PRIM, false);
+        for (prim, &(name, scene)) in prims.iter().enumerate() {
+            self.curves_prim(&mut layer, groom_path, prim, name, scene, &sampled)?;
+        }
+        self.write_structure(layer, &strings)
+    }
+
+    /// One curves prim and its properties; `sampled` holds the time samples
+    /// of the first prim (the only one of an animated export).
+    fn curves_prim(
+        &mut self,
+        layer: &mut Layer,
+        groom_path: u32,
+        prim: usize,
+        name: &str,
+        scene: &CurvesScene,
+        sampled: &BTreeMap<&str, u64>,
+    ) -> Result<(), ExportError> {
+        let curves_path = layer.path(Some(groom_path), name, false);
         let property_tokens: Vec<u32> = scene
             .properties
             .iter()
@@ -281,22 +317,27 @@ impl CrateWriter {
                 PropertyValue::Token(token) => {
                     Some(inlined(type_id::TOKEN, layer.token(token).into()))
                 }
-                _ => self.defaults.get(&property.name).copied(),
+                _ => self.defaults.get(&(prim, property.name.clone())).copied(),
             };
             if let Some(default) = default {
                 fields.push(("default", default));
             }
-            if let Some(&rep) = sampled.get(property.name.as_str()) {
+            if let Some(&rep) = sampled.get(property.name.as_str()).filter(|_| prim == 0) {
                 fields.push(("timeSamples", rep));
             }
             layer.spec(path, SPEC_ATTRIBUTE, &fields);
         }
+        Ok(())
+    }
 
+    /// The structural sections and the table of contents; patches the
+    /// bootstrap and renames the file into place.
+    fn write_structure(mut self, layer: Layer, strings: &[u32]) -> Result<(), ExportError> {
         // Structural sections.
         let mut sections: Vec<(&str, u64, u64)> = Vec::new();
         let contents = [
             ("TOKENS", layer.tokens_section()),
-            ("STRINGS", strings_section(&strings)),
+            ("STRINGS", strings_section(strings)),
             ("FIELDS", layer.fields_section()),
             ("FIELDSETS", layer.fieldsets_section()),
             ("PATHS", layer.paths_section()),
@@ -594,7 +635,7 @@ pub(super) struct AnimatedCrate {
 
 impl AnimatedCrate {
     pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedCrate, ExportError> {
-        let writer = CrateWriter::create(path, &scene)?;
+        let writer = CrateWriter::create(path, &[(CURVES_PRIM, &scene)])?;
         // The arrays are in the file; `finish` needs only their reps.
         scene.forget_values();
         Ok(AnimatedCrate {
@@ -638,6 +679,7 @@ impl FrameWriter for AnimatedCrate {
                 message: "an animated export needs at least one frame".into(),
             });
         }
-        this.writer.finish(&this.scene, Some(this.samples))
+        this.writer
+            .finish(&[(CURVES_PRIM, &this.scene)], Some(this.samples))
     }
 }

@@ -1,4 +1,5 @@
-//! USD export: one `BasisCurves` prim under an `Xform` root, written as text
+//! USD export: `BasisCurves` prims under an `Xform` root (one prim, or for a
+//! static groom mixing curve types one per [`PrimKey`]), written as text
 //! (`.usda`, [`usda`]) or as a binary crate file (`.usdc`/`.usd`,
 //! [`crate_writer`]).
 //!
@@ -29,13 +30,123 @@ pub enum Encoding {
     Crate,
 }
 
+/// What the strands of one `BasisCurves` prim share: curve type and basis,
+/// and wrap. Strands that differ in any field go to different prims, so
+/// nothing is converted on the way out; a further key (guide or render
+/// hair) is one more field here and one more part of [`PrimKey::name`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) struct PrimKey {
+    /// The per-strand `curve_basis` code the importers give grooms that
+    /// mix bases (0 linear, 1 bezier, 2 bspline, 3 catmullRom, 4 hermite,
+    /// 5 power).
+    pub basis_code: i32,
+    /// The per-strand `curve_wrap` code of grooms that mix wraps (0
+    /// nonperiodic, 1 periodic, 2 pinned).
+    pub wrap_code: i32,
+}
+
+const BASES: [CurveBasis; 6] = [
+    CurveBasis::Linear,
+    CurveBasis::Bezier,
+    CurveBasis::Bspline,
+    CurveBasis::CatmullRom,
+    CurveBasis::Hermite,
+    CurveBasis::Power,
+];
+const WRAPS: [&str; 3] = ["nonperiodic", "periodic", "pinned"];
+
+impl PrimKey {
+    fn basis(self) -> Option<CurveBasis> {
+        usize::try_from(self.basis_code)
+            .ok()
+            .and_then(|i| BASES.get(i).copied())
+    }
+
+    fn wrap(self) -> Option<&'static str> {
+        usize::try_from(self.wrap_code)
+            .ok()
+            .and_then(|i| WRAPS.get(i).copied())
+    }
+
+    /// The prim's name: `Strands_<basis>`, then `_<wrap>` unless nonperiodic.
+    fn name(self) -> String {
+        let basis = match self.basis() {
+            Some(CurveBasis::CatmullRom) => "catmullRom".to_string(),
+            Some(basis) => basis.name().to_string(),
+            None => format!("basis{}", self.basis_code),
+        };
+        match self.wrap() {
+            Some("nonperiodic") => format!("{CURVES_PRIM}_{basis}"),
+            Some(wrap) => format!("{CURVES_PRIM}_{basis}_{wrap}"),
+            None => format!("{CURVES_PRIM}_{basis}_wrap{}", self.wrap_code),
+        }
+    }
+}
+
+/// A per-strand code attribute, if the groom has one of the right size.
+fn strand_codes<'g>(groom: &'g Groom, name: &str) -> Option<&'g [i32]> {
+    match groom.attribute(name).map(|a| (&a.values, a.scope)) {
+        Some((AttributeValues::Int(codes), Scope::Strand))
+            if codes.len() == groom.strand_count() =>
+        {
+            Some(codes)
+        }
+        _ => None,
+    }
+}
+
+/// The strands of each prim: `None` for a groom of one kind of curve
+/// (written as one `Strands` prim), else one group per [`PrimKey`], in the
+/// order of each group's first strand.
+fn prim_groups(groom: &Groom) -> Option<Vec<(PrimKey, Vec<usize>)>> {
+    let bases = strand_codes(groom, "curve_basis");
+    let wraps = strand_codes(groom, "curve_wrap");
+    if bases.is_none() && wraps.is_none() {
+        return None;
+    }
+    let basis_default = BASES.iter().position(|&b| b == groom.basis).unwrap_or(0) as i32;
+    let wrap_default = WRAPS.iter().position(|&w| w == wrap_of(groom)).unwrap_or(0) as i32;
+    let mut groups: Vec<(PrimKey, Vec<usize>)> = Vec::new();
+    for strand in 0..groom.strand_count() {
+        let key = PrimKey {
+            basis_code: bases.map_or(basis_default, |c| c[strand]),
+            wrap_code: wraps.map_or(wrap_default, |c| c[strand]),
+        };
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, strands)) => strands.push(strand),
+            None => groups.push((key, vec![strand])),
+        }
+    }
+    (groups.len() > 1).then_some(groups)
+}
+
 /// Writes a static groom, or an animated one when it has frames.
 pub fn write(path: &Path, groom: &Groom, encoding: Encoding) -> Result<(), ExportError> {
     if groom.frames.is_empty() {
-        let scene = CurvesScene::new(path, groom, None)?;
+        let scenes = match prim_groups(groom) {
+            None => vec![(
+                CURVES_PRIM.to_string(),
+                CurvesScene::new(path, groom, None)?,
+            )],
+            Some(groups) => {
+                let mut scenes = Vec::with_capacity(groups.len());
+                for (key, strands) in groups {
+                    let mut part = groom.select_strands(&strands);
+                    part.basis = key.basis().unwrap_or(groom.basis);
+                    part.remove_attribute("curve_basis");
+                    part.remove_attribute("curve_wrap");
+                    let wrap = key.wrap().unwrap_or("nonperiodic");
+                    part.provenance
+                        .metadata
+                        .insert("usd.wrap".into(), wrap.into());
+                    scenes.push((key.name(), CurvesScene::new(path, &part, None)?));
+                }
+                scenes
+            }
+        };
         return match encoding {
-            Encoding::Text => usda::write_static(path, &scene),
-            Encoding::Crate => crate_writer::write_static(path, &scene),
+            Encoding::Text => usda::write_static(path, &scenes),
+            Encoding::Crate => crate_writer::write_static(path, &scenes),
         };
     }
     let options = AnimationOptions {

@@ -15,22 +15,41 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
+/// Writes the curves prims `scenes` (name and scene; the first gives the
+/// stage metadata) under the root.
+pub(super) fn write_static(
+    path: &Path,
+    scenes: &[(String, CurvesScene)],
+) -> Result<(), ExportError> {
     let io_error = |e| ExportError::io(path, e);
+    let Some((_, first)) = scenes.first() else {
+        return Err(ExportError::Invalid {
+            file: path.to_path_buf(),
+            message: "no curves to write".into(),
+        });
+    };
     let mut file = AtomicFile::create(path).map_err(io_error)?;
-    file.write_all(header(scene, None).as_bytes())
-        .and_then(|()| write_properties(&mut file, scene))
-        .and_then(|()| file.write_all(CLOSING))
-        .map_err(io_error)?;
+    let mut text = stage_header(first, None);
+    for (index, (name, scene)) in scenes.iter().enumerate() {
+        if index > 0 {
+            text.push_str("    }\n\n");
+        }
+        text.push_str(&prim_opening(name));
+        file.write_all(text.as_bytes())
+            .and_then(|()| write_properties(&mut file, scene))
+            .map_err(io_error)?;
+        text.clear();
+    }
+    file.write_all(CLOSING).map_err(io_error)?;
     file.commit().map_err(io_error)
 }
 
 /// Closes the curves prim and the root.
 const CLOSING: &[u8] = b"    }\n}\n";
 
-/// Stage metadata and the openings of the root and curves prims; `range`
-/// is the first and last time code of an animated export.
-fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
+/// Stage metadata and the opening of the root; `range` is the first and
+/// last time code of an animated export.
+fn stage_header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let mut header = String::from("#usda 1.0\n(\n");
     let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
     header.push_str("    doc = \"Written by groombake\"\n");
@@ -46,8 +65,17 @@ fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let _ = writeln!(header, "    upAxis = \"{}\"", scene.up_axis);
     header.push_str(")\n\n");
     let _ = writeln!(header, "def Xform \"{ROOT_PRIM}\"\n{{");
-    let _ = writeln!(header, "    def BasisCurves \"{CURVES_PRIM}\"\n    {{");
     header
+}
+
+fn prim_opening(name: &str) -> String {
+    format!("    def BasisCurves \"{name}\"\n    {{\n")
+}
+
+/// The stage header and the opening of the one curves prim of an animated
+/// export.
+fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
+    stage_header(scene, range) + &prim_opening(CURVES_PRIM)
 }
 
 fn write_properties(out: &mut dyn Write, scene: &CurvesScene) -> io::Result<()> {

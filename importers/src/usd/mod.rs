@@ -451,6 +451,22 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             prim.path
         ))
     })?;
+    // Time-varying topology: a groom holds one (refused with where it changes).
+    if let Some(first) = counts_attribute.static_value() {
+        let changed = counts_attribute
+            .samples
+            .iter()
+            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
+        if let Some((code, _)) = changed {
+            return Err(at(
+                counts_attribute,
+                format!(
+                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
+                     groombake reads grooms of one topology"
+                ),
+            ));
+        }
+    }
     let counts_values = counts_attribute
         .static_value()
         .and_then(|v| v.numbers(1))
@@ -734,19 +750,12 @@ fn empty_like(values: &AttributeValues, len: usize) -> AttributeValues {
 
 /// Per-strand values repeated over each strand's vertices.
 fn per_vertex(values: &AttributeValues, counts: &[u32]) -> AttributeValues {
-    fn spread<T: Copy>(values: &[T], counts: &[u32]) -> Vec<T> {
-        values
-            .iter()
-            .zip(counts)
-            .flat_map(|(&v, &n)| std::iter::repeat_n(v, n as usize))
-            .collect()
-    }
-    match values {
-        AttributeValues::Float(v) => AttributeValues::Float(spread(v, counts)),
-        AttributeValues::Vec2(v) => AttributeValues::Vec2(spread(v, counts)),
-        AttributeValues::Vec3(v) => AttributeValues::Vec3(spread(v, counts)),
-        AttributeValues::Int(v) => AttributeValues::Int(spread(v, counts)),
-    }
+    let each_vertex: Vec<std::ops::Range<usize>> = counts
+        .iter()
+        .enumerate()
+        .flat_map(|(strand, &n)| std::iter::repeat_n(strand..strand + 1, n as usize))
+        .collect();
+    values.select(&each_vertex)
 }
 
 fn append(into: &mut AttributeValues, from: &AttributeValues) -> bool {
@@ -896,9 +905,20 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         }
     }
 
+    // Each curves prim's composed path and strand count, for `inspect`.
+    let prims: Vec<String> = sets
+        .iter()
+        .map(|(path, set)| format!("{path} {}", set.counts.len()))
+        .collect();
+    groom
+        .provenance
+        .metadata
+        .insert(groom::PRIMS_KEY.into(), prims.join("\n"));
+
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
     let mut basis_codes = Vec::new();
+    let mut wrap_codes = Vec::new();
     let mut notes = stage.notes.clone();
     for (group, (path, set)) in sets.into_iter().enumerate() {
         let vertices_before = groom.points.len();
@@ -910,30 +930,21 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 Scope::Strand => strands_before,
             };
             match groom.attribute_mut(&attribute.name) {
-                Some(existing) if existing.scope == attribute.scope => {
-                    if !append(&mut existing.values, &attribute.values) {
-                        return Err(ImportError::malformed(
-                            file,
-                            Place::Path(path.clone()),
-                            format!(
-                                "primvar '{}' has another type than in an earlier curves prim",
-                                attribute.name
-                            ),
-                        ));
-                    }
-                }
                 Some(existing) => {
                     // Interpolation is per prim: where prims differ, the
                     // groom holds the attribute per vertex.
-                    if existing.scope == Scope::Strand {
+                    if existing.scope != attribute.scope && existing.scope == Scope::Strand {
                         existing.values = per_vertex(&existing.values, &earlier_counts);
                         existing.scope = Scope::Vertex;
                     }
-                    let values = match attribute.scope {
-                        Scope::Strand => per_vertex(&attribute.values, &set.counts),
-                        Scope::Vertex => attribute.values.clone(),
+                    let spread;
+                    let values = if existing.scope == attribute.scope {
+                        &attribute.values
+                    } else {
+                        spread = per_vertex(&attribute.values, &set.counts);
+                        &spread
                     };
-                    if !append(&mut existing.values, &values) {
+                    if !append(&mut existing.values, values) {
                         return Err(ImportError::malformed(
                             file,
                             Place::Path(path.clone()),
@@ -956,6 +967,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         }
         group_ids.extend(std::iter::repeat_n(group as i32, set.counts.len()));
         basis_codes.extend(std::iter::repeat_n(basis_code(set.basis), set.counts.len()));
+        wrap_codes.extend(std::iter::repeat_n(wrap_code(&set.wrap), set.counts.len()));
         for (index, frame) in groom.frames.iter_mut().enumerate() {
             match set.samples.get(index) {
                 Some((_, points)) => frame.points.extend_from_slice(points),
@@ -992,8 +1004,31 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         ));
         notes.push("curves of several bases: per-strand basis in 'curve_basis' (0 linear, 1 bezier, 2 bspline, 3 catmullRom)".into());
     }
+    if groom
+        .provenance
+        .metadata
+        .get("usd.wrap")
+        .map(String::as_str)
+        == Some("mixed")
+    {
+        groom.set_attribute(Attribute::per_strand(
+            "curve_wrap",
+            AttributeValues::Int(wrap_codes),
+        ));
+        notes.push("curves of several wraps: per-strand wrap in 'curve_wrap' (0 nonperiodic, 1 periodic, 2 pinned)".into());
+    }
     groom.provenance.info = notes.join("; ");
     Ok(groom)
+}
+
+/// Index of a wrap in the per-strand `curve_wrap` attribute of grooms that
+/// mix wraps.
+fn wrap_code(wrap: &str) -> i32 {
+    match wrap {
+        "periodic" => 1,
+        "pinned" => 2,
+        _ => 0,
+    }
 }
 
 #[cfg(test)]

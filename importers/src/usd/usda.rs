@@ -765,7 +765,8 @@ impl<'a> Parser<'a> {
             }
             return Ok(());
         }
-        let type_name = word;
+        // Sdf's legacy type names read as the types usd-core maps them to.
+        let type_name = legacy_type_alias(word).unwrap_or(word);
         let array = if self.eat(b'[')? {
             self.expect(b']')?;
             true
@@ -1074,4 +1075,32 @@ fn parse_number(text: &str, single: bool) -> Option<f64> {
     } else {
         text.parse::<f64>().ok()
     }
+}
+
+/// The current name of one of Sdf's legacy value type names (`PointFloat`
+/// is `point3f`), as usd-core still reads them; `None` for other names.
+fn legacy_type_alias(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "Vec2f" => "float2",
+        "Vec3f" => "float3",
+        "Vec4f" => "float4",
+        "Vec2d" => "double2",
+        "Vec3d" => "double3",
+        "Vec4d" => "double4",
+        "Vec2i" => "int2",
+        "Vec3i" => "int3",
+        "Vec4i" => "int4",
+        "PointFloat" => "point3f",
+        "Point" => "point3d",
+        "NormalFloat" => "normal3f",
+        "Normal" => "normal3d",
+        "VectorFloat" => "vector3f",
+        "Vector" => "vector3d",
+        "ColorFloat" => "color3f",
+        "Color" => "color3d",
+        "Quatf" => "quatf",
+        "Quatd" => "quatd",
+        "Matrix4d" => "matrix4d",
+        _ => return None,
+    })
 }
