@@ -145,6 +145,7 @@ pub fn exit_code_for(error: &anyhow::Error) -> u8 {
         cause.is::<BadInput>()
             || cause.is::<importers::ImportError>()
             || cause.is::<groombake::generate::GeneratorError>()
+            || cause.is::<bake::ReportUnusable>()
     });
     if bad_input {
         2

@@ -12,6 +12,7 @@ mod bench;
 mod cli;
 mod formats;
 mod golden;
+mod hardening;
 mod inspect;
 mod preview;
 mod roundtrip;
