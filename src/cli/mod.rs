@@ -163,10 +163,11 @@ pub fn is_broken_pipe(error: &anyhow::Error) -> bool {
     })
 }
 
-/// Refuses an output path whose extension names no format, before any
-/// input is read.
-pub fn check_output_extension(path: &std::path::Path) -> anyhow::Result<()> {
+/// Refuses an output path whose extension names no format or that cannot
+/// be written, before any input is read.
+pub fn check_output_path(path: &std::path::Path) -> anyhow::Result<()> {
     groombake::timeline::check_output_extension(path)
+        .and_then(|()| groombake::timeline::outputs::check_writable(path))
         .map_err(|message| BadInput(format!("{}: {message}", path.display())).into())
 }
 

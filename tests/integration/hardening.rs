@@ -280,6 +280,13 @@ fn unknown_output_extension_is_refused_before_reading_the_input() {
     }
     let stderr = dir.run_fail(&["convert", "no_such_input.hair", "out."], 2);
     assert!(stderr.contains("no file extension"), "{stderr}");
+    // An output that cannot be written, likewise, with the OS's words once.
+    std::fs::write(dir.path("afile"), "not a folder").unwrap();
+    let stderr = dir.run_fail(&["convert", "no_such_input.hair", "afile/out.usda"], 2);
+    assert!(stderr.contains("is a file, not a folder"), "{stderr}");
+    let stderr = dir.run_fail(&["convert", "no_such_input.hair", "/proc/x/out.usda"], 2);
+    assert_one_line(&stderr);
+    assert_eq!(stderr.matches("os error").count(), 1, "{stderr}");
 }
 
 #[test]
