@@ -75,7 +75,72 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
             message: problem.to_string(),
         });
     }
+    let scale = format_scale(path, groom);
+    check_scaled(path, &groom.points, scale, None)?;
+    for (index, frame) in groom.frames.iter().enumerate() {
+        check_scaled(path, &frame.points, scale, Some(index))?;
+    }
     Ok(())
+}
+
+/// The scale a format applies to the groom's coordinates by itself, after
+/// the caller's unit conversion: Alembic is written in centimetres.
+fn format_scale(path: &Path, groom: &Groom) -> f64 {
+    match extension_of(path).as_str() {
+        "abc" => groom.units.meters_per_unit / groom::Units::CENTIMETERS.meters_per_unit,
+        _ => 1.0,
+    }
+}
+
+/// Refuses points that are not finite as the file will store them (f32
+/// after `scale`): 1.7e38 m is finite, in centimetres it is infinite.
+fn check_scaled(
+    path: &Path,
+    points: &[[f32; 3]],
+    scale: f64,
+    frame: Option<usize>,
+) -> Result<(), ExportError> {
+    let stored = |c: f32| (f64::from(c) * scale) as f32;
+    let Some(index) = points
+        .iter()
+        .position(|p| !p.iter().all(|&c| stored(c).is_finite()))
+    else {
+        return Ok(());
+    };
+    let frame = frame.map_or(String::new(), |f| format!("frame {f}, "));
+    Err(ExportError::Invalid {
+        file: path.to_path_buf(),
+        message: format!(
+            "{frame}vertex {index} {:?} is not finite in the file's units (x{scale})",
+            points[index]
+        ),
+    })
+}
+
+/// A frame writer that refuses frames with values the file cannot hold.
+struct CheckedFrames {
+    path: PathBuf,
+    scale: f64,
+    frames: usize,
+    inner: Box<dyn FrameWriter>,
+}
+
+impl FrameWriter for CheckedFrames {
+    fn write_frame(&mut self, frame: &Frame) -> Result<(), ExportError> {
+        if !frame.time.is_finite() {
+            return Err(ExportError::Invalid {
+                file: self.path.clone(),
+                message: format!("frame {}: time is not finite", self.frames),
+            });
+        }
+        check_scaled(&self.path, &frame.points, self.scale, Some(self.frames))?;
+        self.frames += 1;
+        self.inner.write_frame(frame)
+    }
+
+    fn finish(self: Box<Self>) -> Result<(), ExportError> {
+        self.inner.finish()
+    }
 }
 
 /// Writes a groom, choosing the format by extension. A groom with frames is
@@ -106,7 +171,7 @@ pub fn animated(
     check_exportable(path, groom)?;
     // glTF keeps frame times in seconds; USD writes time codes and Alembic
     // its time sampling at `options.fps`.
-    match extension_of(path).as_str() {
+    let inner = match extension_of(path).as_str() {
         "usda" => usd::animated(path, groom, options, usd::Encoding::Text),
         "usdc" | "usd" => usd::animated(path, groom, options, usd::Encoding::Crate),
         "gltf" | "glb" => gltf::animated(path, groom),
@@ -118,7 +183,13 @@ pub fn animated(
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
-    }
+    }?;
+    Ok(Box::new(CheckedFrames {
+        path: path.to_path_buf(),
+        scale: format_scale(path, groom),
+        frames: 0,
+        inner,
+    }))
 }
 
 /// The units a file at `path` is written in when the user names none (the

@@ -58,6 +58,7 @@ pub struct ValidateArgs {
 pub fn classify(error: BakeError) -> anyhow::Error {
     match error {
         BakeError::Interrupted { signal } => super::Interrupted(signal).into(),
+        e @ BakeError::Report { .. } => ReportUnusable(e.to_string()).into(),
         e if e.is_bad_input() => BadInput(e.to_string()).into(),
         e => e.into(),
     }
@@ -80,12 +81,22 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
     Ok(signal)
 }
 
+/// The report path itself is unusable: bad input, and no report is written.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct ReportUnusable(String);
+
 pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     let mut report = BakeReport::start(&args.timeline);
     let result = bake_and_report(&args, &mut report);
     let Some(path) = &args.report else {
         return result;
     };
+    if let Err(e) = &result {
+        if e.chain().any(|c| c.is::<ReportUnusable>()) {
+            return result;
+        }
+    }
     let (status, error) = match &result {
         Ok(()) => ("ok", None),
         Err(e) => {
@@ -150,18 +161,34 @@ pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {
     for warning in timeline.warnings() {
         eprintln!("warning: {warning}");
     }
-    let stages = timeline.file.stages.get_ref().len();
+    let unsimulated = groombake::sim::unsimulated_strands(&prepared.strands);
+    if let Some(first) = unsimulated.first() {
+        eprintln!(
+            "warning: {} strand(s) would not be simulated (first: strand {}: {})",
+            unsimulated.len(),
+            first.strand,
+            first.reason
+        );
+    }
     println!(
-        "{}: ok: {} strands, {} vertices, {} colliders, {} {} ({:.3} s at dt {:.6} s), {} exports",
+        "{}: ok: {}, {}, {}, {} ({:.3} s at dt {:.6} s), {}",
         args.timeline.display(),
-        prepared.strands.strand_count(),
-        prepared.strands.vertex_count(),
-        timeline.file.colliders.len(),
-        stages,
-        if stages == 1 { "stage" } else { "stages" },
+        counted(prepared.strands.strand_count(), "strand"),
+        counted(prepared.strands.vertex_count(), "vertex"),
+        counted(timeline.file.colliders.len(), "collider"),
+        counted(timeline.file.stages.get_ref().len(), "stage"),
         timeline.duration(),
         timeline.dt,
-        timeline.file.exports.len()
+        counted(timeline.file.exports.len(), "export")
     );
     Ok(())
+}
+
+/// `1 stage`, `2 stages`, `1 vertex`, `0 vertices`.
+fn counted(n: usize, noun: &str) -> String {
+    match (n, noun) {
+        (1, _) => format!("1 {noun}"),
+        (_, "vertex") => format!("{n} vertices"),
+        _ => format!("{n} {noun}s"),
+    }
 }

@@ -35,7 +35,7 @@ pub struct ConvertArgs {
 }
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
-    super::check_output_extension(&args.output)?;
+    super::check_output_path(&args.output)?;
     let mut groom = super::read_groom(&args.input)?;
     if let Some(units) = args.source_units {
         groom.units = units;

@@ -50,7 +50,7 @@ pub struct GenerateArgs {
 }
 
 pub fn run(args: GenerateArgs) -> anyhow::Result<()> {
-    super::check_output_extension(&args.output)?;
+    super::check_output_path(&args.output)?;
     let (layout, shape) = match args.kind {
         Kind::Straight => (RootLayout::Scalp, StrandShape::Straight),
         Kind::Wavy => (RootLayout::Scalp, StrandShape::Wavy),

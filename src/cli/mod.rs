@@ -160,6 +160,7 @@ pub fn exit_code_for(error: &anyhow::Error) -> u8 {
         cause.is::<BadInput>()
             || cause.is::<importers::ImportError>()
             || cause.is::<groombake::generate::GeneratorError>()
+            || cause.is::<bake::ReportUnusable>()
     });
     if bad_input {
         2
@@ -191,10 +192,11 @@ pub fn warn_or_refuse(warnings: &[String], strict: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Refuses an output path whose extension names no format, before any
-/// input is read.
-pub fn check_output_extension(path: &std::path::Path) -> anyhow::Result<()> {
+/// Refuses an output path whose extension names no format or that cannot
+/// be written, before any input is read.
+pub fn check_output_path(path: &std::path::Path) -> anyhow::Result<()> {
     groombake::timeline::check_output_extension(path)
+        .and_then(|()| groombake::timeline::outputs::check_writable(path))
         .map_err(|message| BadInput(format!("{}: {message}", path.display())).into())
 }
 

@@ -55,6 +55,7 @@ mod tests;
 pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;
+pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
 

@@ -3,6 +3,7 @@
 //! and is frozen (see `step.rs`), so a NaN never reaches another strand.
 
 use super::math::{Quat, V3};
+use super::state::StrandSet;
 
 /// True when every value is finite.
 pub fn all_finite(positions: &[V3], velocities: &[V3], frames: &[Quat], angular: &[V3]) -> bool {
@@ -19,6 +20,90 @@ pub fn all_finite(positions: &[V3], velocities: &[V3], frames: &[Quat], angular:
         any |= q.iter().map(bad).fold(0, |a, b| a | b);
     }
     any == 0
+}
+
+/// Largest strain of an edge (length against rest length) the watchdog
+/// lets pass: hair stretches a few per cent before it breaks.
+pub const MAX_STRAIN: f32 = 0.5;
+
+/// A strand the physical sanity watchdog contained, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Blowup {
+    pub strand: usize,
+    pub reason: String,
+}
+
+/// The physical sanity watchdog, beside the NaN quarantine: after a step,
+/// a simulated strand with a non-finite position or velocity, an edge
+/// strained beyond [`MAX_STRAIN`] (stretched or compressed) or a collapsed
+/// edge is put back where it was before the step (`before`, the positions
+/// then), stopped and frozen, as a strand that turned NaN is. Returns the
+/// strands contained, in order.
+pub fn contain_blowups(strands: &mut StrandSet, before: &[V3]) -> Vec<Blowup> {
+    let mut blowups = Vec::new();
+    for strand in 0..strands.strand_count() {
+        if !strands.simulated[strand] || strands.frozen[strand] {
+            continue;
+        }
+        let (first, end) = (strands.offsets[strand], strands.offsets[strand + 1]);
+        let Some(reason) = strand_problem(strands, first, end) else {
+            continue;
+        };
+        if before.len() == strands.positions.len() {
+            strands.positions[first..end].copy_from_slice(&before[first..end]);
+        }
+        for v in &mut strands.velocities[first..end] {
+            *v = [0.0; 3];
+        }
+        strands.frozen[strand] = true;
+        blowups.push(Blowup { strand, reason });
+    }
+    blowups
+}
+
+/// What is physically wrong with the strand of vertices `first..end`.
+fn strand_problem(strands: &StrandSet, first: usize, end: usize) -> Option<String> {
+    let positions = &strands.positions[first..end];
+    let velocities = &strands.velocities[first..end];
+    if !all_finite(positions, velocities, &[], &[]) {
+        return Some("a position or velocity is not finite".into());
+    }
+    for (e, w) in positions.windows(2).enumerate() {
+        let length = (0..3)
+            .map(|k| (w[1][k] - w[0][k]).powi(2))
+            .sum::<f32>()
+            .sqrt();
+        if length <= 1e-9 {
+            return Some(format!("edge {e} collapsed (two identical points)"));
+        }
+        let rest = strands.edges[first + e].rest_length;
+        let strain = length / rest - 1.0;
+        if strain.abs() > MAX_STRAIN {
+            return Some(format!(
+                "edge {e} strained {:+.0} % ({length:.3e} m, rest {rest:.3e} m)",
+                strain * 100.0
+            ));
+        }
+    }
+    None
+}
+
+/// The strands that are not simulated, with why: fewer than two points, or
+/// two identical consecutive points (a zero-length edge).
+pub fn unsimulated_strands(strands: &StrandSet) -> Vec<Blowup> {
+    (0..strands.strand_count())
+        .filter(|&s| !strands.simulated[s])
+        .map(|strand| {
+            let (first, end) = (strands.offsets[strand], strands.offsets[strand + 1]);
+            let positions = &strands.positions[first..end];
+            let reason = match positions.windows(2).position(|w| w[0] == w[1]) {
+                _ if positions.len() < 2 => "fewer than two points".to_string(),
+                Some(e) => format!("points {e} and {} are identical", e + 1),
+                None => "an edge of zero length".to_string(),
+            };
+            Blowup { strand, reason }
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 
 use super::motion::{pose_at, Pose as KeyPose};
 use super::outputs::{self, Staging};
-use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport};
+use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport, WatchdogReport};
 use super::schema::{ColliderActivity, ExportWhat, ShapeSpec, StageKind};
 use super::stages::{drive_wetness, PermRods, StagePlan, WindPlan};
 use super::{Timeline, TimelineError};
@@ -101,12 +101,19 @@ pub enum BakeError {
     /// file as another.
     #[error("{}: {message}", file.display())]
     Output { file: PathBuf, message: String },
+    /// The report path cannot be written or names an output: no report
+    /// can be written, not even of the failure.
+    #[error("--report {}: {message}", file.display())]
+    Report { file: PathBuf, message: String },
     #[error("stopped by signal {signal}; temporaries removed, no output replaced")]
     Interrupted { signal: usize },
     #[error(transparent)]
     Preview(#[from] crate::preview::PreviewError),
     #[error("the bake was interrupted")]
     Cancelled,
+    /// A failure writing an output, naming its final path.
+    #[error("{0}")]
+    Write(String),
 }
 
 impl BakeError {
@@ -118,6 +125,7 @@ impl BakeError {
                 | BakeError::Import(_)
                 | BakeError::Input { .. }
                 | BakeError::Output { .. }
+                | BakeError::Report { .. }
         )
     }
 }
@@ -361,26 +369,41 @@ pub fn plan_outputs(timeline: &Timeline, options: &BakeOptions) -> Result<Vec<Pa
             source,
         })?;
         if let Some((_, other)) = seen.iter().find(|(c, _)| *c == canonical) {
-            let message = if options.report.as_deref() == Some(*other) {
-                format!(
-                    "the report '{}' would overwrite this output",
-                    other.display()
-                )
-            } else {
-                format!(
-                    "'{}' and '{}' are the same file",
-                    other.display(),
-                    path.display()
-                )
-            };
+            if options.report.as_deref() == Some(*other) {
+                return Err(BakeError::Report {
+                    file: other.to_path_buf(),
+                    message: format!(
+                        "would overwrite the output '{}' ({})",
+                        path.display(),
+                        timeline
+                            .error_at(span.clone(), "")
+                            .to_string()
+                            .trim_end_matches([' ', ':'])
+                    ),
+                });
+            }
+            let message = format!(
+                "'{}' and '{}' are the same file",
+                other.display(),
+                path.display()
+            );
             return Err(timeline.error_at(span.clone(), message).into());
         }
         seen.push((canonical, path));
     }
     for (path, _) in seen.iter().rev() {
-        outputs::check_writable(path).map_err(|message| BakeError::Output {
-            file: path.to_path_buf(),
-            message,
+        outputs::check_writable(path).map_err(|message| {
+            if options.report.as_deref() == Some(path.as_ref()) {
+                BakeError::Report {
+                    file: path.to_path_buf(),
+                    message,
+                }
+            } else {
+                BakeError::Output {
+                    file: path.to_path_buf(),
+                    message,
+                }
+            }
         })?;
     }
     Ok(planned.into_iter().map(|(p, _)| p).collect())
@@ -606,10 +629,17 @@ pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, B
     let pool = builder
         .build()
         .map_err(|e| BakeError::Threads(e.to_string()))?;
-    pool.install(|| {
+    let result = pool.install(|| {
         let mut run = BakeRun::prepare(timeline, options, pool.current_num_threads())?;
         run.run_stages()?;
         run.write()
+    });
+    // Errors of outputs name the staged file: say the final one.
+    result.map_err(|e| match e {
+        BakeError::Export(_) | BakeError::Io { .. } | BakeError::Preview(_) => {
+            BakeError::Write(outputs::final_names(&e.to_string()))
+        }
+        e => e,
     })
 }
 
@@ -653,6 +683,8 @@ struct StageRun<'p> {
     rods: Option<PermRods>,
     wind: Option<WindPlan>,
     unrolled: bool,
+    /// Positions before the step, for the watchdog to put a strand back.
+    before: Vec<[f32; 3]>,
 }
 
 impl<'a> BakeRun<'a> {
@@ -702,6 +734,17 @@ impl<'a> BakeRun<'a> {
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
+        // Strands the solver cannot move are said, not skipped silently.
+        let unsimulated = sim::unsimulated_strands(&strands);
+        if let Some(first) = unsimulated.first() {
+            report.warnings.push(format!(
+                "{} strand(s) are not simulated (first: strand {}: {})",
+                unsimulated.len(),
+                first.strand,
+                first.reason
+            ));
+        }
+        report.unsimulated_strands = unsimulated.iter().map(|b| b.strand).collect();
         // A dry run (a preview of the timeline) writes no file.
         let exports: &[super::schema::ExportSpec] = if options.dry {
             &[]
@@ -892,8 +935,16 @@ impl<'a> BakeRun<'a> {
             self.options.interrupted()?;
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
-            let contained = self.advance(&mut stage, t_local, t_end)?;
+            let (contained, blowups) = self.advance(&mut stage, t_local, t_end)?;
             stage_report.contained_strands.extend(contained);
+            for b in blowups {
+                stage_report.contained_strands.push(b.strand);
+                stage_report.watchdog.push(WatchdogReport {
+                    strand: b.strand,
+                    step: local_step,
+                    reason: b.reason,
+                });
+            }
             self.step_index += 1;
             if let Some(monitor) = &self.options.monitor {
                 monitor.steps_done.store(self.step_index, Ordering::Relaxed);
@@ -910,11 +961,20 @@ impl<'a> BakeRun<'a> {
                 with_frames_from_positions(&self.groom, &self.strands, &material_of(timeline))?;
         }
         self.snapshot(format!("after {}", stage_report.name));
-        if !stage_report.contained_strands.is_empty() {
+        let non_finite = stage_report.contained_strands.len() - stage_report.watchdog.len();
+        if non_finite > 0 {
             stage_report.warnings.push(format!(
-                "{} strand(s) turned non-finite and were frozen: {:?}",
-                stage_report.contained_strands.len(),
-                stage_report.contained_strands
+                "{non_finite} strand(s) turned non-finite and were frozen: {:?}",
+                &stage_report.contained_strands[..]
+            ));
+        }
+        if let Some(first) = stage_report.watchdog.first() {
+            stage_report.warnings.push(format!(
+                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {})",
+                stage_report.watchdog.len(),
+                first.strand,
+                first.step,
+                first.reason
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();
@@ -981,12 +1041,28 @@ impl<'a> BakeRun<'a> {
             rods,
             wind,
             unrolled: false,
+            before: Vec::new(),
         })
     }
 
     /// One step of a stage at stage time `t_local` (ending at global time
-    /// `t_end`); returns the strands contained in it.
+    /// `t_end`), then the watchdog; returns the strands contained in it:
+    /// by the quarantine (non-finite) and by the watchdog (with why).
     fn advance(
+        &mut self,
+        stage: &mut StageRun<'_>,
+        t_local: f64,
+        t_end: f64,
+    ) -> Result<(Vec<usize>, Vec<sim::Blowup>), BakeError> {
+        stage.before.clear();
+        stage.before.extend_from_slice(self.strands.positions());
+        let contained = self.step(stage, t_local, t_end)?;
+        let blowups = sim::contain_blowups(&mut self.strands, &stage.before);
+        Ok((contained, blowups))
+    }
+
+    /// The stage's drives and the solver (or the wind model) for one step.
+    fn step(
         &mut self,
         stage: &mut StageRun<'_>,
         t_local: f64,

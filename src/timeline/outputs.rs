@@ -110,6 +110,12 @@ fn probe(dir: &Path) -> Result<(), String> {
     }
 }
 
+/// `text` with this process's staged file names replaced by their final
+/// names (for messages about an output).
+pub fn final_names(text: &str) -> String {
+    text.replace(&format!("{STAGED_PREFIX}{}.", std::process::id()), "")
+}
+
 /// Outputs staged beside their final paths, renamed into place by
 /// [`Staging::commit`]; dropped before that, the staged files are removed.
 #[derive(Debug, Default)]

@@ -18,8 +18,11 @@ pub struct StageReport {
     #[serde(serialize_with = "millis")]
     pub wall_seconds: f64,
     pub steps: u64,
-    /// Strands frozen after their state turned non-finite in this stage.
+    /// Strands frozen in this stage: their state turned non-finite, or
+    /// the watchdog found them blown up (then also in `watchdog`).
     pub contained_strands: Vec<usize>,
+    /// Strands the physical sanity watchdog contained, with why.
+    pub watchdog: Vec<WatchdogReport>,
     pub warnings: Vec<String>,
 }
 
@@ -31,6 +34,14 @@ pub struct OutputReport {
     pub sha256: String,
     /// Frames written (animated exports).
     pub frames: Option<usize>,
+}
+
+/// A strand the watchdog contained: at which step of the stage, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct WatchdogReport {
+    pub strand: usize,
+    pub step: u64,
+    pub reason: String,
 }
 
 /// An input file of the bake and its SHA-256.
@@ -69,6 +80,9 @@ pub struct BakeReport {
     pub threads: usize,
     pub strands: usize,
     pub vertices: usize,
+    /// Strands the solver does not move (fewer than two points, or two
+    /// identical consecutive points).
+    pub unsimulated_strands: Vec<usize>,
     #[serde(serialize_with = "micros")]
     pub simulated_seconds: f64,
     #[serde(serialize_with = "millis")]

@@ -15,6 +15,7 @@ mod diff;
 mod formats;
 mod golden;
 mod guides;
+mod hardening;
 mod inspect;
 mod install;
 mod preview;
