@@ -6,6 +6,7 @@ pub mod batch;
 pub mod diff;
 pub mod generate;
 pub mod preview;
+pub mod report_html;
 pub mod sim;
 pub mod stochastic_wind;
 pub mod timeline;

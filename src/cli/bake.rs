@@ -57,12 +57,21 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         dry: false,
         monitor: None,
     };
-    let report = bake(&timeline, &options).map_err(classify)?.report;
+    let outcome = bake(&timeline, &options).map_err(classify)?;
+    let report = &outcome.report;
     if let Some(path) = &args.report {
         let mut file = groom::AtomicFile::create(path)
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        serde_json::to_writer_pretty(&mut file, &report)?;
-        std::io::Write::write_all(&mut file, b"\n")?;
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("html"))
+        {
+            let html = html_report(&timeline, &outcome)?;
+            std::io::Write::write_all(&mut file, html.as_bytes())?;
+        } else {
+            serde_json::to_writer_pretty(&mut file, report)?;
+            std::io::Write::write_all(&mut file, b"\n")?;
+        }
         file.commit()
             .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     }
@@ -81,6 +90,31 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The HTML page of a bake, with its contact sheet drawn from the snapshots.
+fn html_report(
+    timeline: &Timeline,
+    outcome: &groombake::timeline::bake::BakeOutcome,
+) -> anyhow::Result<String> {
+    use groombake::preview;
+    let entries: Vec<preview::SheetEntry> = outcome
+        .snapshots
+        .iter()
+        .map(|(label, groom)| preview::SheetEntry {
+            label,
+            groom,
+            frame: None,
+        })
+        .collect();
+    let options = groombake::timeline::bake::sheet_options(timeline);
+    let sheet = preview::render_sheet(&entries, &options)?;
+    let png = preview::png_bytes(&sheet)?;
+    Ok(groombake::report_html::bake_page(
+        &outcome.report,
+        &outcome.snapshots,
+        Some(&png),
+    ))
 }
 
 pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {
