@@ -66,7 +66,8 @@ fn axis_number(v: f64) -> String {
 
 /// A line plot as inline SVG, with its axis ranges labelled and a legend.
 pub fn svg_plot(title: &str, x_label: &str, series: &[Series]) -> String {
-    let (w, h, left, right, top, bottom) = (420.0, 240.0, 56.0, 12.0, 28.0, 40.0);
+    // The legend sits right of the plot area, clear of the curves.
+    let (w, h, left, right, top, bottom) = (500.0, 240.0, 56.0, 112.0, 28.0, 40.0);
     let all = series
         .iter()
         .flat_map(|s| s.points.iter())
@@ -136,10 +137,10 @@ pub fn svg_plot(title: &str, x_label: &str, series: &[Series]) -> String {
         let _ = write!(
             svg,
             "<rect x=\"{lx}\" y=\"{ry}\" width=\"10\" height=\"3\" fill=\"{c}\"/><text x=\"{tx}\" y=\"{ly}\" font-size=\"11\">{n}</text>",
-            lx = w - right - 110.0,
+            lx = w - right + 8.0,
             ry = ly - 4.0,
             c = s.color,
-            tx = w - right - 96.0,
+            tx = w - right + 22.0,
             n = escape(&s.name)
         );
     }
