@@ -149,8 +149,8 @@ while IFS= read -r -d '' file; do
   rel=${file#local/}
   if ! cmp -s "$file" "farm/$rel"; then echo "DIFFERS: $rel"; status=1; fi
   compared=$((compared + 1))
-done < <(find local -type f ! -name groombake_job.json ! -name batch_report.json -print0 | sort -z)
-extra=$(find farm -type f ! -name groombake_job.json ! -name batch_report.json ! -path 'farm/slurm/*' | wc -l)
+done < <(find local -type f ! -name groombake_job.json ! -name batch_report.json ! -name batch_report.html -print0 | sort -z)
+extra=$(find farm -type f ! -name groombake_job.json ! -name batch_report.json ! -name batch_report.html ! -path 'farm/slurm/*' | wc -l)
 [ "$extra" -eq "$compared" ] || { echo "farm has $extra outputs, local $compared"; status=1; }
 echo "compared $compared output files byte for byte"
 [ "$compared" -ge 24 ] || { echo "too few outputs"; status=1; }

@@ -523,10 +523,14 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
     }
 }
 
-/// Writes the merged report (JSON) into the manifest's output folder.
+/// Writes the merged report into the manifest's output folder: JSON, and
+/// beside it the same as an HTML page ([`MERGED_REPORT`] with `.html`).
 pub fn write_merged(manifest: &Manifest, report: &BatchReport) -> std::io::Result<PathBuf> {
     let path = manifest.out.join(MERGED_REPORT);
     write_json(&path, report)?;
+    let mut html = groom::AtomicFile::create(&path.with_extension("html"))?;
+    std::io::Write::write_all(&mut html, crate::report_html::batch_page(report).as_bytes())?;
+    html.commit()?;
     Ok(path)
 }
 

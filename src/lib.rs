@@ -8,6 +8,7 @@ pub mod budget;
 pub mod diff;
 pub mod generate;
 pub mod preview;
+pub mod report_html;
 pub mod sim;
 pub mod stochastic_wind;
 pub mod timeline;

@@ -88,7 +88,8 @@ pub struct ReportUnusable(String);
 
 pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     let mut report = BakeReport::start(&args.timeline);
-    let result = bake_and_report(&args, &mut report);
+    let (mut sheet, mut snapshots) = (None, Vec::new());
+    let result = bake_and_report(&args, &mut report, &mut sheet, &mut snapshots);
     let Some(path) = &args.report else {
         return result;
     };
@@ -111,13 +112,31 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     };
     let code = result.as_ref().map_or_else(super::exit_code_for, |_| 0);
     report.finish(status, code, error);
-    let written = report
-        .write(path)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
+    let written = if wants_html(Some(path)) {
+        let page = groombake::report_html::bake_page(&report, &snapshots, sheet.as_deref());
+        groom::AtomicFile::create(path).and_then(|mut file| {
+            std::io::Write::write_all(&mut file, page.as_bytes())?;
+            file.commit()
+        })
+    } else {
+        report.write(path)
+    }
+    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
     result.and(written)
 }
 
-fn bake_and_report(args: &BakeArgs, report: &mut BakeReport) -> anyhow::Result<()> {
+/// Whether the report path asks for the HTML page (`--report R.html`).
+fn wants_html(path: Option<&std::path::Path>) -> bool {
+    path.and_then(|p| p.extension())
+        .is_some_and(|e| e.eq_ignore_ascii_case("html"))
+}
+
+fn bake_and_report(
+    args: &BakeArgs,
+    report: &mut BakeReport,
+    html: &mut Option<Vec<u8>>,
+    snapshots: &mut Vec<(String, groom::Groom)>,
+) -> anyhow::Result<()> {
     let interrupt = stop_on_signals()?;
     let timeline = Timeline::load(&args.timeline).map_err(|e| BadInput(e.to_string()))?;
     report.record_sources(&timeline);
@@ -133,6 +152,10 @@ fn bake_and_report(args: &BakeArgs, report: &mut BakeReport) -> anyhow::Result<(
         strict: args.strict,
     };
     let outcome = bake(&timeline, &options).map_err(classify)?;
+    if wants_html(args.report.as_deref()) {
+        *html = Some(sheet_png(&timeline, &outcome.snapshots)?);
+        *snapshots = outcome.snapshots;
+    }
     let started = std::mem::take(&mut report.started);
     *report = outcome.report;
     report.started = started;
@@ -152,6 +175,12 @@ fn bake_and_report(args: &BakeArgs, report: &mut BakeReport) -> anyhow::Result<(
         eprintln!("warning: {warning}");
     }
     Ok(())
+}
+
+/// The contact sheet of a bake's snapshots, as PNG bytes for the HTML page.
+fn sheet_png(timeline: &Timeline, snapshots: &[(String, groom::Groom)]) -> anyhow::Result<Vec<u8>> {
+    let sheet = groombake::timeline::bake::sheet_image(timeline, snapshots).map_err(classify)?;
+    Ok(groombake::preview::png_bytes(&sheet)?)
 }
 
 pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {

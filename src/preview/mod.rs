@@ -370,28 +370,35 @@ pub fn contact_sheet(pictures: &[(String, Image)]) -> Image {
     sheet
 }
 
-/// Writes a picture as an 8-bit RGB PNG, atomically. Fixed compression and
-/// filter settings and no time chunk make the bytes depend on the pixels only.
+/// A picture as 8-bit RGB PNG bytes. Fixed compression and filter settings
+/// and no time chunk make the bytes depend on the pixels only.
+pub fn png_bytes(image: &Image) -> Result<Vec<u8>, png::EncodingError> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_deflate_compression(png::DeflateCompression::Level(6));
+        encoder.set_filter(png::Filter::Paeth);
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&image.pixels)?;
+        writer.finish()?;
+    }
+    Ok(bytes)
+}
+
+/// Writes a picture as an 8-bit RGB PNG ([`png_bytes`]), atomically.
 pub fn write_png(image: &Image, path: &Path) -> Result<(), PreviewError> {
     let io = |source| PreviewError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let encoding = |source| PreviewError::Png {
+    let bytes = png_bytes(image).map_err(|source| PreviewError::Png {
         path: path.to_path_buf(),
         source,
-    };
+    })?;
     let mut file = groom::AtomicFile::create(path).map_err(io)?;
-    {
-        let mut encoder = png::Encoder::new(&mut file, image.width, image.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_deflate_compression(png::DeflateCompression::Level(6));
-        encoder.set_filter(png::Filter::Paeth);
-        let mut writer = encoder.write_header().map_err(encoding)?;
-        writer.write_image_data(&image.pixels).map_err(encoding)?;
-        writer.finish().map_err(encoding)?;
-    }
+    std::io::Write::write_all(&mut file, &bytes).map_err(io)?;
     file.commit().map_err(io)
 }
 

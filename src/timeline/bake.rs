@@ -497,6 +497,16 @@ fn write_sheet(
     snapshots: &[(String, Groom)],
     path: &Path,
 ) -> Result<(), BakeError> {
+    crate::preview::write_png(&sheet_image(timeline, snapshots)?, path)?;
+    Ok(())
+}
+
+/// The before/after contact sheet of a bake's snapshots, with the colliders
+/// active in each (the sheet export and the HTML report draw the same).
+pub fn sheet_image(
+    timeline: &Timeline,
+    snapshots: &[(String, Groom)],
+) -> Result<crate::preview::Image, BakeError> {
     let options = sheet_options(timeline, snapshots);
     let surfaces = super::surfaces::snapshot_surfaces(timeline)?;
     let entries: Vec<crate::preview::SheetEntry> = snapshots
@@ -509,9 +519,7 @@ fn write_sheet(
             surfaces,
         })
         .collect();
-    let image = crate::preview::render_sheet(&entries, &options)?;
-    crate::preview::write_png(&image, path)?;
-    Ok(())
+    Ok(crate::preview::render_sheet(&entries, &options)?)
 }
 
 /// Creates the folder an output goes into.

@@ -43,7 +43,9 @@ fn outputs(root: &Path) -> BTreeMap<String, Vec<u8>> {
             let path = entry.unwrap().path();
             if path.is_dir() {
                 stack.push(path);
-            } else if !path.ends_with("groombake_job.json") && !path.ends_with("batch_report.json")
+            } else if !path.ends_with("groombake_job.json")
+                && !path.ends_with("batch_report.json")
+                && !path.ends_with("batch_report.html")
             {
                 let key = path.strip_prefix(root).unwrap().display().to_string();
                 files.insert(key, std::fs::read(&path).unwrap());
@@ -252,4 +254,51 @@ fn slurm_script_is_a_job_array_with_a_merge() {
         .status()
         .unwrap();
     assert!(check.success(), "the script is not valid bash");
+}
+
+#[test]
+fn html_reports_are_self_contained_pages() {
+    let dir = TestDir::new();
+    dir.run_ok(&[
+        "generate",
+        "swatch",
+        "-o",
+        "g.hair",
+        "--strands",
+        "4",
+        "--length",
+        "0.1",
+    ]);
+    let timeline = std::fs::read_to_string(sample("bed_hair.toml"))
+        .unwrap()
+        .replace("generate = {", "source = \"g.hair\" # {");
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q", "--report", "r.json"]);
+    dir.run_ok(&["bake", "t.toml", "-q", "--report", "r.html"]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("r.json")).unwrap()).unwrap();
+    let html = std::fs::read_to_string(dir.path("r.html")).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert_eq!(
+        html.matches("src=\"data:image/png;base64,").count(),
+        1,
+        "one contact sheet"
+    );
+    assert_eq!(html.matches("<svg").count(), 3, "three plots");
+    for output in json["outputs"].as_array().unwrap() {
+        assert!(
+            html.contains(output["sha256"].as_str().unwrap()),
+            "{output}"
+        );
+    }
+    for stage in ["wet", "press", "dry", "release"] {
+        assert!(html.contains(&format!("<td>{stage}</td>")));
+    }
+    // Nothing outside the page is loaded.
+    assert!(
+        !html.contains("http://")
+            || html.matches("http://").count()
+                == html.matches("xmlns=\"http://www.w3.org/2000/svg\"").count()
+    );
+    assert!(!html.contains("https://"));
 }
