@@ -415,3 +415,39 @@ fps = 96
         peaks[1]
     );
 }
+
+/// A state export holds guides and render hair; a later bake continues
+/// from it, simulating the guides only and delivering both again.
+#[test]
+fn a_state_with_render_hair_continues_in_a_later_bake() {
+    let dir = TestDir::new();
+    let first = render_timeline(
+        10,
+        "render = { count = 30, seed = 1 }",
+        "[[export]]\npath = \"state.usda\"\nwhat = \"state\"\n",
+    );
+    std::fs::write(dir.path("first.toml"), first).unwrap();
+    dir.run_ok(&["bake", "first.toml", "-q"]);
+    let state = read(&dir.path("state.usda"));
+    assert_eq!((state.strand_count(), guide_count(&state)), (40, 10));
+    let second = r#"
+[groom]
+source = "state.usda"
+[[stage]]
+kind = "settle"
+duration = 0.05
+[[export]]
+path = "continued.abc"
+what = "final"
+"#;
+    std::fs::write(dir.path("second.toml"), second).unwrap();
+    dir.run_ok(&["bake", "second.toml", "-q", "--report", "report.json"]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("report.json")).unwrap()).unwrap();
+    assert_eq!(report["strands"], 10, "only the guides are simulated");
+    let continued = read(&dir.path("continued.abc"));
+    assert_eq!(
+        (continued.strand_count(), guide_count(&continued)),
+        (40, 10)
+    );
+}
