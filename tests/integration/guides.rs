@@ -451,3 +451,36 @@ what = "final"
         (40, 10)
     );
 }
+
+/// Render roots scattered on a scalp mesh follow their nearest guides.
+#[test]
+fn render_hair_grows_on_a_scalp_mesh() {
+    let dir = TestDir::new();
+    let head = sample("head.obj");
+    let timeline = render_timeline(
+        20,
+        &format!(
+            "render = {{ count = 50, seed = 4, scalp = {:?} }}",
+            head.to_str().unwrap()
+        ),
+        "[[export]]\npath = \"final.abc\"\nwhat = \"final\"\n",
+    );
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q"]);
+    let out = read(&dir.path("final.abc"));
+    assert_eq!((out.strand_count(), guide_count(&out)), (70, 20));
+    let (vertices, _) = importers::mesh::read_triangles(&head).unwrap();
+    let (min, max) = groom::bounds_of(&vertices).unwrap();
+    // Roots on the mesh (the file is in cm, the mesh in metres).
+    for strand in out.strands().skip(20) {
+        let root = strand[0];
+        for k in 0..3 {
+            let c = root[k] / 100.0;
+            assert!(c >= min[k] - 1e-4 && c <= max[k] + 1e-4, "root {root:?}");
+        }
+    }
+    let missing = render_timeline(10, "render = { count = 5, scalp = \"nowhere.obj\" }", "");
+    std::fs::write(dir.path("bad.toml"), missing).unwrap();
+    let e = dir.run_fail(&["validate", "bad.toml"], 2);
+    assert!(e.contains("scalp mesh") && e.contains("nowhere.obj"), "{e}");
+}
