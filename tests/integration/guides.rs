@@ -415,3 +415,72 @@ fps = 96
         peaks[1]
     );
 }
+
+/// A state export holds guides and render hair; a later bake continues
+/// from it, simulating the guides only and delivering both again.
+#[test]
+fn a_state_with_render_hair_continues_in_a_later_bake() {
+    let dir = TestDir::new();
+    let first = render_timeline(
+        10,
+        "render = { count = 30, seed = 1 }",
+        "[[export]]\npath = \"state.usda\"\nwhat = \"state\"\n",
+    );
+    std::fs::write(dir.path("first.toml"), first).unwrap();
+    dir.run_ok(&["bake", "first.toml", "-q"]);
+    let state = read(&dir.path("state.usda"));
+    assert_eq!((state.strand_count(), guide_count(&state)), (40, 10));
+    let second = r#"
+[groom]
+source = "state.usda"
+[[stage]]
+kind = "settle"
+duration = 0.05
+[[export]]
+path = "continued.abc"
+what = "final"
+"#;
+    std::fs::write(dir.path("second.toml"), second).unwrap();
+    dir.run_ok(&["bake", "second.toml", "-q", "--report", "report.json"]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path("report.json")).unwrap()).unwrap();
+    assert_eq!(report["strands"], 10, "only the guides are simulated");
+    let continued = read(&dir.path("continued.abc"));
+    assert_eq!(
+        (continued.strand_count(), guide_count(&continued)),
+        (40, 10)
+    );
+}
+
+/// Render roots scattered on a scalp mesh follow their nearest guides.
+#[test]
+fn render_hair_grows_on_a_scalp_mesh() {
+    let dir = TestDir::new();
+    let head = sample("head.obj");
+    let timeline = render_timeline(
+        20,
+        &format!(
+            "render = {{ count = 50, seed = 4, scalp = {:?} }}",
+            head.to_str().unwrap()
+        ),
+        "[[export]]\npath = \"final.abc\"\nwhat = \"final\"\n",
+    );
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q"]);
+    let out = read(&dir.path("final.abc"));
+    assert_eq!((out.strand_count(), guide_count(&out)), (70, 20));
+    let (vertices, _) = importers::mesh::read_triangles(&head).unwrap();
+    let (min, max) = groom::bounds_of(&vertices).unwrap();
+    // Roots on the mesh (the file is in cm, the mesh in metres).
+    for strand in out.strands().skip(20) {
+        let root = strand[0];
+        for k in 0..3 {
+            let c = root[k] / 100.0;
+            assert!(c >= min[k] - 1e-4 && c <= max[k] + 1e-4, "root {root:?}");
+        }
+    }
+    let missing = render_timeline(10, "render = { count = 5, scalp = \"nowhere.obj\" }", "");
+    std::fs::write(dir.path("bad.toml"), missing).unwrap();
+    let e = dir.run_fail(&["validate", "bad.toml"], 2);
+    assert!(e.contains("scalp mesh") && e.contains("nowhere.obj"), "{e}");
+}
