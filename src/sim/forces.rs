@@ -33,7 +33,7 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
     /// The cell, packed by [`pack`].
-    key: u64,
+    key: u32,
     /// Global index of the edge's first vertex.
     edge: u32,
     strand: u32,
@@ -107,12 +107,13 @@ fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
     ]
 }
 
-/// A cell as one key (21 bits per axis: cells alias only 2^21 cells apart,
-/// which the exact distance test then rejects).
+/// A cell as one key (10 bits per axis, so an entry is 12 bytes: cells
+/// alias only 1,024 cells apart, metres at the usual cell sizes, and an
+/// aliased edge is then rejected by the exact distance test).
 #[inline]
-fn pack(cell: [i32; 3]) -> u64 {
-    let m = (1u64 << 21) - 1;
-    ((cell[0] as u64 & m) << 42) | ((cell[1] as u64 & m) << 21) | (cell[2] as u64 & m)
+fn pack(cell: [i32; 3]) -> u32 {
+    let m = (1u32 << 10) - 1;
+    ((cell[0] as u32 & m) << 20) | ((cell[1] as u32 & m) << 10) | (cell[2] as u32 & m)
 }
 
 #[inline]
@@ -127,7 +128,7 @@ fn bucket_of(cell: [i32; 3], bits: u32) -> usize {
 /// (Amanatides and Woo 1987), without repeats (hand-written: the walk is
 /// a dozen lines and the hot loop of the grid's build). `None` when there are more
 /// than `MAX_CELLS_PER_EDGE`.
-fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u64; MAX_CELLS_PER_EDGE]) -> Option<usize> {
+fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) -> Option<usize> {
     let mut at = cell_of(a, inv_cell);
     let end = cell_of(b, inv_cell);
     let crossings: i64 = (0..3)
@@ -280,11 +281,11 @@ fn sort_into_buckets(
 }
 
 #[inline]
-fn unpack(key: u64) -> [i32; 3] {
-    let m = (1u64 << 21) - 1;
+fn unpack(key: u32) -> [i32; 3] {
+    let m = (1u32 << 10) - 1;
     [
-        ((key >> 42) & m) as i32,
-        ((key >> 21) & m) as i32,
+        ((key >> 20) & m) as i32,
+        ((key >> 10) & m) as i32,
         (key & m) as i32,
     ]
 }
@@ -335,7 +336,7 @@ impl EdgeGrid {
             .enumerate()
             .for_each(|(k, out)| {
                 out.clear();
-                let mut cells = [0u64; MAX_CELLS_PER_EDGE];
+                let mut cells = [0u32; MAX_CELLS_PER_EDGE];
                 let first = k * CHUNK_VERTICES;
                 for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
                     let Some(strand) = edge_of(v) else {
