@@ -298,3 +298,43 @@ fn peak_memory() -> Option<u64> {
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Positions after 30 steps on the mesh head on `threads` threads.
+    fn positions_bits(threads: usize, hair_hair: Option<f32>) -> Vec<u32> {
+        let workload = Workload {
+            strands: 300,
+            vertices: 24,
+            iterations: 5,
+            hair_hair,
+            collider: HeadCollider::Mesh(
+                concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
+            ),
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut scene = workload.scene().unwrap();
+        pool.install(|| (0..30).try_for_each(|_| scene.step()))
+            .unwrap();
+        scene
+            .strands
+            .positions()
+            .iter()
+            .flat_map(|p| p.map(f32::to_bits))
+            .collect()
+    }
+
+    #[test]
+    fn hair_hair_on_a_mesh_head_is_bit_identical_for_any_thread_count() {
+        let one = positions_bits(1, Some(5.0));
+        assert_eq!(one, positions_bits(2, Some(5.0)));
+        assert_eq!(one, positions_bits(3, Some(5.0)));
+        // Hair touched hair: the penalty changed the result.
+        assert_ne!(one, positions_bits(1, None));
+    }
+}

@@ -33,7 +33,7 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
     /// The cell, packed by [`pack`].
-    key: u64,
+    key: u32,
     /// Global index of the edge's first vertex.
     edge: u32,
     strand: u32,
@@ -84,6 +84,7 @@ pub struct EdgeGrid {
     /// Sums in the order of `vertices`, then by vertex index.
     sorted_sums: Vec<V3>,
     sums: Vec<V3>,
+    scratch: SortScratch,
 }
 
 #[inline]
@@ -106,12 +107,13 @@ fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
     ]
 }
 
-/// A cell as one key (21 bits per axis: cells alias only 2^21 cells apart,
-/// which the exact distance test then rejects).
+/// A cell as one key (10 bits per axis, so an entry is 12 bytes: cells
+/// alias only 1,024 cells apart, metres at the usual cell sizes, and an
+/// aliased edge is then rejected by the exact distance test).
 #[inline]
-fn pack(cell: [i32; 3]) -> u64 {
-    let m = (1u64 << 21) - 1;
-    ((cell[0] as u64 & m) << 42) | ((cell[1] as u64 & m) << 21) | (cell[2] as u64 & m)
+fn pack(cell: [i32; 3]) -> u32 {
+    let m = (1u32 << 10) - 1;
+    ((cell[0] as u32 & m) << 20) | ((cell[1] as u32 & m) << 10) | (cell[2] as u32 & m)
 }
 
 #[inline]
@@ -126,7 +128,7 @@ fn bucket_of(cell: [i32; 3], bits: u32) -> usize {
 /// (Amanatides and Woo 1987), without repeats (hand-written: the walk is
 /// a dozen lines and the hot loop of the grid's build). `None` when there are more
 /// than `MAX_CELLS_PER_EDGE`.
-fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u64; MAX_CELLS_PER_EDGE]) -> Option<usize> {
+fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) -> Option<usize> {
     let mut at = cell_of(a, inv_cell);
     let end = cell_of(b, inv_cell);
     let crossings: i64 = (0..3)
@@ -171,45 +173,119 @@ fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u64; MAX_CELLS_PER_EDGE]) 
     Some(n)
 }
 
-/// Counting sort of `items` (in order) into `out` by bucket; `starts`
-/// ends as each bucket's first index (`buckets + 1` of them).
-fn sort_into_buckets<'a>(
-    items: impl Iterator<Item = &'a Entry> + Clone,
-    total: usize,
+/// Bucket ranges sorted independently (in parallel).
+const PARTS: usize = 64;
+
+/// Reusable buffers of [`sort_into_buckets`].
+#[derive(Debug, Default)]
+struct SortScratch {
+    /// Per chunk, its entries grouped by part (in order within a part).
+    grouped: Vec<Vec<Entry>>,
+    /// Per chunk, where each part starts in `grouped` (and the end).
+    part_starts: Vec<[u32; PARTS + 1]>,
+}
+
+/// A stable counting sort of the entries of `chunks` (in chunk order)
+/// into `out` by bucket (`1 << 3 bits` of them); `starts` ends as each
+/// bucket's first index and the total. Chunks first group their entries
+/// by part (a range of buckets), then each part sorts its entries from
+/// every chunk: both in parallel, each over data that fits in cache, and
+/// the result does not depend on the thread count.
+fn sort_into_buckets(
+    chunks: &[Vec<Entry>],
     bits: u32,
+    scratch: &mut SortScratch,
     starts: &mut Vec<u32>,
     out: &mut Vec<Entry>,
 ) {
+    use rayon::prelude::*;
     let buckets = 1usize << (3 * bits);
-    starts.clear();
-    starts.resize(buckets + 1, 0);
-    for e in items.clone() {
-        starts[bucket_of(unpack(e.key), bits) + 1] += 1;
+    let per_part = buckets / PARTS;
+    let part_of = |e: &Entry| bucket_of(unpack(e.key), bits) / per_part;
+    if scratch.grouped.len() < chunks.len() {
+        scratch.grouped.resize_with(chunks.len(), Vec::new);
     }
-    for i in 1..starts.len() {
-        starts[i] += starts[i - 1];
-    }
-    // Stable: generation order within a bucket.
+    scratch.part_starts.resize(chunks.len(), [0; PARTS + 1]);
+    chunks
+        .par_iter()
+        .zip(scratch.grouped.par_iter_mut())
+        .zip(scratch.part_starts.par_iter_mut())
+        .for_each(|((chunk, grouped), part_starts)| {
+            *part_starts = [0; PARTS + 1];
+            for e in chunk {
+                part_starts[part_of(e) + 1] += 1;
+            }
+            for p in 1..=PARTS {
+                part_starts[p] += part_starts[p - 1];
+            }
+            let mut cursor = *part_starts;
+            grouped.clear();
+            grouped.resize(chunk.len(), Entry::default());
+            for e in chunk {
+                let slot = &mut cursor[part_of(e)];
+                grouped[*slot as usize] = *e;
+                *slot += 1;
+            }
+        });
+    let grouped = &scratch.grouped[..chunks.len()];
+    let part_starts = &scratch.part_starts;
+    let total: usize = chunks.iter().map(Vec::len).sum();
     out.clear();
     out.resize(total, Entry::default());
-    for e in items {
-        let slot = &mut starts[bucket_of(unpack(e.key), bits)];
-        out[*slot as usize] = *e;
-        *slot += 1;
-    }
-    // The cursors now hold each bucket's end: shift back to starts.
-    for i in (1..starts.len()).rev() {
-        starts[i] = starts[i - 1];
-    }
-    starts[0] = 0;
+    starts.clear();
+    starts.resize(buckets + 1, 0);
+    starts[buckets] = total as u32;
+    // Each part's slice of `out`, cut in order without allocating.
+    let mut rest = out.as_mut_slice();
+    let mut base = 0u32;
+    let parts: [(u32, &mut [Entry]); PARTS] = std::array::from_fn(|p| {
+        let size: u32 = part_starts.iter().map(|s| s[p + 1] - s[p]).sum();
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(size as usize);
+        rest = tail;
+        base += size;
+        (base - size, mine)
+    });
+    parts
+        .into_par_iter()
+        .zip(starts[..buckets].par_chunks_mut(per_part))
+        .enumerate()
+        .for_each(|(p, ((base, out), starts))| {
+            let first_bucket = p * per_part;
+            let entries = grouped
+                .iter()
+                .zip(part_starts)
+                .flat_map(|(g, s)| &g[s[p] as usize..s[p + 1] as usize]);
+            starts.fill(0);
+            for e in entries.clone() {
+                starts[bucket_of(unpack(e.key), bits) - first_bucket] += 1;
+            }
+            let mut sum = 0;
+            for s in starts.iter_mut() {
+                let count = *s;
+                *s = sum;
+                sum += count;
+            }
+            for e in entries {
+                let slot = &mut starts[bucket_of(unpack(e.key), bits) - first_bucket];
+                out[*slot as usize] = *e;
+                *slot += 1;
+            }
+            // The cursors hold each bucket's end: back to starts, global.
+            let mut previous = 0;
+            for s in starts.iter_mut() {
+                let end = *s;
+                *s = previous + base;
+                previous = end;
+            }
+        });
 }
 
 #[inline]
-fn unpack(key: u64) -> [i32; 3] {
-    let m = (1u64 << 21) - 1;
+fn unpack(key: u32) -> [i32; 3] {
+    let m = (1u32 << 10) - 1;
     [
-        ((key >> 42) & m) as i32,
-        ((key >> 21) & m) as i32,
+        ((key >> 20) & m) as i32,
+        ((key >> 10) & m) as i32,
         (key & m) as i32,
     ]
 }
@@ -260,7 +336,7 @@ impl EdgeGrid {
             .enumerate()
             .for_each(|(k, out)| {
                 out.clear();
-                let mut cells = [0u64; MAX_CELLS_PER_EDGE];
+                let mut cells = [0u32; MAX_CELLS_PER_EDGE];
                 let first = k * CHUNK_VERTICES;
                 for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
                     let Some(strand) = edge_of(v) else {
@@ -281,41 +357,46 @@ impl EdgeGrid {
             });
         let total: usize = self.chunks[..chunk_count].iter().map(Vec::len).sum();
         // About one bucket per entry or two, a power of two per axis.
-        let mut bits = 1;
+        // At least 2 bits: 64 buckets, one per part.
+        let mut bits = 2;
         while (1usize << (3 * bits)) < total && bits < 9 {
             bits += 1;
         }
         self.axis_bits = bits;
         sort_into_buckets(
-            self.chunks[..chunk_count].iter().flatten(),
-            total,
+            &self.chunks[..chunk_count],
             bits,
+            &mut self.scratch,
             &mut self.starts,
             &mut self.entries,
         );
 
         // The vertices, in cell order.
-        let chunk = &mut self.chunks[0];
-        chunk.clear();
-        chunk.extend(
-            positions
-                .iter()
-                .enumerate()
-                .filter(|(v, p)| owner[*v] != u32::MAX && is_finite3(**p))
-                .map(|(v, p)| Entry {
-                    key: pack(cell_of(*p, inv_cell)),
-                    edge: v as u32,
-                    strand: owner[v],
-                }),
-        );
-        let count = chunk.len();
+        self.chunks[..chunk_count]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, out)| {
+                out.clear();
+                let first = k * CHUNK_VERTICES;
+                for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
+                    let p = positions[v];
+                    if owner[v] != u32::MAX && is_finite3(p) {
+                        out.push(Entry {
+                            key: pack(cell_of(p, inv_cell)),
+                            edge: v as u32,
+                            strand: owner[v],
+                        });
+                    }
+                }
+            });
         sort_into_buckets(
-            self.chunks[0].iter(),
-            count,
+            &self.chunks[..chunk_count],
             bits,
+            &mut self.scratch,
             &mut self.vertex_starts,
             &mut self.vertices,
         );
+        let count = self.vertices.len();
         self.sorted_sums.clear();
         self.sorted_sums.resize(count, [0.0; 3]);
         let (entries, starts) = (&self.entries, &self.starts);
