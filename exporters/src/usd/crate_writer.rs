@@ -11,7 +11,7 @@
 //! sections use the integer coding (deltas, 2-bit width codes) inside an LZ4
 //! block made only of literals, which any LZ4 decoder accepts.
 
-use super::{time_code, CurvesScene, PropertyValue, CURVES_PRIM, ROOT_PRIM};
+use super::{time_code, CurvesScene, PropertyValue, ROOT_PRIM};
 use crate::{ExportError, FrameWriter};
 use groom::{AtomicFile, Frame};
 use std::collections::BTreeMap;
@@ -71,11 +71,12 @@ pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), Expor
     writer.finish(scene, None)
 }
 
-/// The time samples of `points` and `extent`, one rep of each per frame.
+/// The time samples of `points` and `extent`: per curves prim, one rep
+/// of each per frame.
 struct Samples {
     times: Vec<f64>,
-    points: Vec<u64>,
-    extents: Vec<u64>,
+    points: Vec<Vec<u64>>,
+    extents: Vec<Vec<u64>>,
 }
 
 /// The open file plus the reps of the static property values.
@@ -83,8 +84,9 @@ struct CrateWriter {
     path: PathBuf,
     file: AtomicFile,
     position: u64,
-    /// Rep of each property's default value, by property name.
-    defaults: BTreeMap<String, u64>,
+    /// Rep of each property's default value, by prim index and property
+    /// name.
+    defaults: BTreeMap<(usize, String), u64>,
     scratch: Vec<u8>,
 }
 
@@ -100,7 +102,12 @@ impl CrateWriter {
         };
         // The bootstrap is written again with the table-of-contents offset.
         writer.write_bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
-        for property in &scene.properties {
+        for (prim, property) in scene
+            .prims
+            .iter()
+            .enumerate()
+            .flat_map(|(k, p)| p.properties.iter().map(move |q| (k, q)))
+        {
             let rep = match &property.value {
                 // Tokens are inlined once their index is known, in `finish`.
                 PropertyValue::Token(_) => continue,
@@ -121,7 +128,7 @@ impl CrateWriter {
                 )?,
                 PropertyValue::Float3s(v) => writer.write_float3s(v)?,
             };
-            writer.defaults.insert(property.name.clone(), rep);
+            writer.defaults.insert((prim, property.name.clone()), rep);
         }
         Ok(writer)
     }
@@ -204,17 +211,20 @@ impl CrateWriter {
         let mut strings: Vec<u32> = Vec::new();
 
         // Time samples: one shared times vector.
-        let mut sampled: BTreeMap<&str, u64> = BTreeMap::new();
+        let mut sampled: BTreeMap<(usize, &str), u64> = BTreeMap::new();
         let mut time_range = None;
         if let Some(samples) = &samples {
             let mut bytes = (samples.times.len() as u64).to_le_bytes().to_vec();
             bytes.extend(samples.times.iter().flat_map(|t| t.to_le_bytes()));
             let start = self.write_bytes(&bytes)?;
             let times_rep = value_rep(type_id::DOUBLE_VECTOR, false, false, start);
-            let points = self.write_time_samples(times_rep, &samples.points)?;
-            let extents = self.write_time_samples(times_rep, &samples.extents)?;
-            sampled.insert("points", points);
-            sampled.insert("extent", extents);
+            for (prim, (points, extents)) in samples.points.iter().zip(&samples.extents).enumerate()
+            {
+                let points = self.write_time_samples(times_rep, points)?;
+                let extents = self.write_time_samples(times_rep, extents)?;
+                sampled.insert((prim, "points"), points);
+                sampled.insert((prim, "extent"), extents);
+            }
             time_range = samples.times.first().zip(samples.times.last());
         }
 
@@ -242,54 +252,56 @@ impl CrateWriter {
 
         // The Xform root.
         let groom_path = layer.path(Some(root_path), ROOT_PRIM, false);
-        let curves_token = layer.token(CURVES_PRIM);
+        let curves_tokens: Vec<u32> = scene.prims.iter().map(|p| layer.token(p.name)).collect();
         let xform = layer.token("Xform");
         let fields = [
             ("specifier", inlined(type_id::SPECIFIER, 0)),
             ("typeName", inlined(type_id::TOKEN, xform.into())),
-            ("primChildren", self.write_token_vector(&[curves_token])?),
+            ("primChildren", self.write_token_vector(&curves_tokens)?),
         ];
         layer.spec(groom_path, SPEC_PRIM, &fields);
 
-        // The curves prim and its properties.
-        let curves_path = layer.path(Some(groom_path), CURVES_PRIM, false);
-        let property_tokens: Vec<u32> = scene
-            .properties
-            .iter()
-            .map(|p| layer.token(&p.name))
-            .collect();
-        let basis_curves = layer.token("BasisCurves");
-        let fields = [
-            ("specifier", inlined(type_id::SPECIFIER, 0)),
-            ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
-            ("properties", self.write_token_vector(&property_tokens)?),
-        ];
-        layer.spec(curves_path, SPEC_PRIM, &fields);
+        // The curves prims and their properties.
+        for (index, prim) in scene.prims.iter().enumerate() {
+            let curves_path = layer.path(Some(groom_path), prim.name, false);
+            let property_tokens: Vec<u32> = prim
+                .properties
+                .iter()
+                .map(|p| layer.token(&p.name))
+                .collect();
+            let basis_curves = layer.token("BasisCurves");
+            let fields = [
+                ("specifier", inlined(type_id::SPECIFIER, 0)),
+                ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
+                ("properties", self.write_token_vector(&property_tokens)?),
+            ];
+            layer.spec(curves_path, SPEC_PRIM, &fields);
 
-        for property in &scene.properties {
-            let path = layer.path(Some(curves_path), &property.name, true);
-            let type_name = layer.token(property.type_name);
-            let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
-            if property.uniform {
-                fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
-            }
-            if let Some(interpolation) = property.interpolation {
-                let token = layer.token(interpolation);
-                fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
-            }
-            let default = match &property.value {
-                PropertyValue::Token(token) => {
-                    Some(inlined(type_id::TOKEN, layer.token(token).into()))
+            for property in &prim.properties {
+                let path = layer.path(Some(curves_path), &property.name, true);
+                let type_name = layer.token(property.type_name);
+                let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
+                if property.uniform {
+                    fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
                 }
-                _ => self.defaults.get(&property.name).copied(),
-            };
-            if let Some(default) = default {
-                fields.push(("default", default));
+                if let Some(interpolation) = property.interpolation {
+                    let token = layer.token(interpolation);
+                    fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
+                }
+                let default = match &property.value {
+                    PropertyValue::Token(token) => {
+                        Some(inlined(type_id::TOKEN, layer.token(token).into()))
+                    }
+                    _ => self.defaults.get(&(index, property.name.clone())).copied(),
+                };
+                if let Some(default) = default {
+                    fields.push(("default", default));
+                }
+                if let Some(&rep) = sampled.get(&(index, property.name.as_str())) {
+                    fields.push(("timeSamples", rep));
+                }
+                layer.spec(path, SPEC_ATTRIBUTE, &fields);
             }
-            if let Some(&rep) = sampled.get(property.name.as_str()) {
-                fields.push(("timeSamples", rep));
-            }
-            layer.spec(path, SPEC_ATTRIBUTE, &fields);
         }
 
         // Structural sections.
@@ -597,13 +609,14 @@ impl AnimatedCrate {
         let writer = CrateWriter::create(path, &scene)?;
         // The arrays are in the file; `finish` needs only their reps.
         scene.forget_values();
+        let prims = scene.prims.len();
         Ok(AnimatedCrate {
             writer,
             scene,
             samples: Samples {
                 times: Vec::new(),
-                points: Vec::new(),
-                extents: Vec::new(),
+                points: vec![Vec::new(); prims],
+                extents: vec![Vec::new(); prims],
             },
         })
     }
@@ -620,13 +633,14 @@ impl FrameWriter for AnimatedCrate {
                 message: format!("frame time codes must increase (time code {code})"),
             });
         }
-        let points = self.writer.write_float3s(&frame.points)?;
-        let extent = self
-            .writer
-            .write_float3s(&self.scene.extent(&frame.points))?;
+        for (index, prim) in self.scene.prims.iter().enumerate() {
+            let points = prim.points_of(&frame.points);
+            let points_rep = self.writer.write_float3s(&points)?;
+            let extent_rep = self.writer.write_float3s(&prim.extent(&points))?;
+            self.samples.points[index].push(points_rep);
+            self.samples.extents[index].push(extent_rep);
+        }
         self.samples.times.push(code);
-        self.samples.points.push(points);
-        self.samples.extents.push(extent);
         Ok(())
     }
 

@@ -11,12 +11,18 @@ mod usda;
 
 use crate::{AnimationOptions, ExportError, FrameWriter};
 use groom::{AttributeValues, CurveBasis, Frame, Groom, Scope};
+use std::borrow::Cow;
+use std::ops::Range;
 use std::path::Path;
 
 /// Name of the root `Xform` (the stage's `defaultPrim`).
 pub(crate) const ROOT_PRIM: &str = "Groom";
 /// Name of the `BasisCurves` prim under the root.
 pub(crate) const CURVES_PRIM: &str = "Strands";
+/// The prims of a groom with guides and render strands (`groom_guide` 1
+/// and 0), in this order.
+pub(crate) const GUIDES_PRIM: &str = "guides";
+pub(crate) const RENDER_PRIM: &str = "render";
 
 /// Frames per second used when a groom with frames is written through
 /// [`crate::write`], which has no [`AnimationOptions`].
@@ -97,131 +103,97 @@ pub(crate) struct Timing {
     pub fps: f64,
 }
 
+/// One `BasisCurves` prim under the root.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CurvesPrim {
+    pub name: &'static str,
+    /// Sorted by name; includes `points` and `extent` of the rest pose.
+    pub properties: Vec<Property>,
+    /// The groom's vertices this prim holds, in order (a frame's points
+    /// for this prim are these ranges of the frame).
+    pub vertex_ranges: Vec<Range<usize>>,
+    /// Half the largest width: the extent grows by it, as USD's own
+    /// `UsdGeomCurves::ComputeExtent` does.
+    pub extent_padding: f32,
+}
+
+impl CurvesPrim {
+    /// This prim's points of a pose of the whole groom.
+    pub fn points_of<'a>(&self, points: &'a [[f32; 3]]) -> Cow<'a, [[f32; 3]]> {
+        match &self.vertex_ranges[..] {
+            [range] => Cow::Borrowed(points.get(range.clone()).unwrap_or(&[])),
+            ranges => Cow::Owned(
+                ranges
+                    .iter()
+                    .flat_map(|r| points.get(r.clone()).unwrap_or(&[]).iter().copied())
+                    .collect(),
+            ),
+        }
+    }
+
+    /// The extent of this prim's part of a pose.
+    pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
+        extent_of(points, self.extent_padding)
+    }
+}
+
 /// Everything both writers put in the file apart from the time samples.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct CurvesScene {
     pub meters_per_unit: f64,
     pub up_axis: &'static str,
     pub timing: Option<Timing>,
-    /// Sorted by name; includes `points` and `extent` of the rest pose.
-    pub properties: Vec<Property>,
+    /// One `Strands` prim, or `guides` and `render` when the groom holds
+    /// both (per-strand `groom_guide`).
+    pub prims: Vec<CurvesPrim>,
     /// Vertex count of the groom (every frame must have as many points).
     pub vertex_count: usize,
-    /// Half the largest width: the extent grows by it, as USD's own
-    /// `UsdGeomCurves::ComputeExtent` does.
-    pub extent_padding: f32,
 }
 
 impl CurvesScene {
     pub fn new(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesScene, ExportError> {
-        let invalid = |message: String| ExportError::Invalid {
-            file: path.to_path_buf(),
-            message,
-        };
-        let (curve_type, basis) = match groom.basis {
-            CurveBasis::Linear => ("linear", None),
-            CurveBasis::Bezier => ("cubic", Some("bezier")),
-            CurveBasis::Bspline => ("cubic", Some("bspline")),
-            CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-            other => {
-                return Err(ExportError::Unsupported {
-                    file: path.to_path_buf(),
-                    message: format!("USD BasisCurves have no {} basis", other.name()),
-                })
-            }
-        };
-        let counts = groom
-            .strand_vertex_counts
-            .iter()
-            .map(|&c| i32::try_from(c).map_err(|_| invalid(format!("strand of {c} points"))))
-            .collect::<Result<Vec<i32>, ExportError>>()?;
-
-        let mut properties = vec![
-            token_property("type", curve_type),
-            token_property("wrap", wrap_of(groom)),
-            Property {
-                name: "curveVertexCounts".into(),
-                type_name: "int[]",
-                uniform: false,
-                interpolation: None,
-                value: PropertyValue::Ints(counts),
-            },
-            Property {
-                name: "points".into(),
-                type_name: "point3f[]",
-                uniform: false,
-                interpolation: None,
-                value: PropertyValue::Float3s(groom.points.clone()),
-            },
-        ];
-        if let Some(basis) = basis {
-            properties.push(token_property("basis", basis));
-        }
-        let mut max_width = 0.0f32;
-        for attribute in &groom.attributes {
-            let interpolation = match attribute.scope {
-                Scope::Vertex => "vertex",
-                Scope::Strand => "uniform",
-            };
-            let (name, type_name, value) = match (&attribute.name[..], &attribute.values) {
-                ("width", AttributeValues::Float(v)) => {
-                    max_width = v.iter().fold(max_width, |m, &w| m.max(w.abs()));
-                    (
-                        "widths".to_string(),
-                        "float[]",
-                        PropertyValue::Floats(v.clone()),
-                    )
-                }
-                ("root_uv", AttributeValues::Vec2(v)) => (
-                    "primvars:st".to_string(),
-                    "texCoord2f[]",
-                    PropertyValue::Float2s(v.clone()),
-                ),
-                (attribute_name, values) => {
-                    let name = format!("primvars:{}", identifier(attribute_name));
-                    let type_name = declared_type(groom, attribute_name, values);
-                    match values {
-                        AttributeValues::Float(v) => {
-                            (name, type_name, PropertyValue::Floats(v.clone()))
-                        }
-                        AttributeValues::Vec2(v) => {
-                            (name, type_name, PropertyValue::Float2s(v.clone()))
-                        }
-                        AttributeValues::Vec3(v) => {
-                            (name, type_name, PropertyValue::Float3s(v.clone()))
-                        }
-                        AttributeValues::Int(v) => {
-                            (name, type_name, PropertyValue::Ints(v.clone()))
+        let prims = match groom.split_guides().filter(|_| groom.has_render_split()) {
+            Some(split) => {
+                let offsets = groom.strand_offsets();
+                let ranges = |strands: &[usize]| -> Vec<Range<usize>> {
+                    let mut ranges: Vec<Range<usize>> = Vec::new();
+                    for &s in strands {
+                        let range = offsets[s]..offsets[s + 1];
+                        match ranges.last_mut() {
+                            Some(last) if last.end == range.start => last.end = range.end,
+                            _ => ranges.push(range),
                         }
                     }
-                }
-            };
-            let name = unique_name(&properties, name);
-            properties.push(Property {
-                name,
-                type_name,
-                uniform: false,
-                interpolation: Some(interpolation),
-                value,
-            });
-        }
-        let extent_padding = max_width * 0.5;
-        properties.push(Property {
-            name: "extent".into(),
-            type_name: "float3[]",
-            uniform: false,
-            interpolation: None,
-            value: PropertyValue::Float3s(extent_of(&groom.points, extent_padding).to_vec()),
-        });
-        properties.sort_by(|a, b| a.name.cmp(&b.name));
-
+                    ranges
+                };
+                vec![
+                    curves_prim(
+                        path,
+                        &split.guides,
+                        GUIDES_PRIM,
+                        ranges(&split.guide_indices),
+                    )?,
+                    curves_prim(
+                        path,
+                        &split.render,
+                        RENDER_PRIM,
+                        ranges(&split.render_indices),
+                    )?,
+                ]
+            }
+            None => vec![curves_prim(
+                path,
+                groom,
+                CURVES_PRIM,
+                std::iter::once(0..groom.points.len()).collect(),
+            )?],
+        };
         Ok(CurvesScene {
             meters_per_unit: groom.units.meters_per_unit,
             up_axis: groom.up_axis.name(),
             timing: fps.map(|fps| Timing { fps }),
-            properties,
+            prims,
             vertex_count: groom.points.len(),
-            extent_padding,
         })
     }
 
@@ -229,7 +201,7 @@ impl CurvesScene {
     /// names, types and tokens: an animated export then holds no copy of
     /// the groom's arrays while frames stream.
     pub fn forget_values(&mut self) {
-        for property in &mut self.properties {
+        for property in self.prims.iter_mut().flat_map(|p| &mut p.properties) {
             match &mut property.value {
                 PropertyValue::Token(_) => {}
                 PropertyValue::Ints(v) => *v = Vec::new(),
@@ -238,11 +210,6 @@ impl CurvesScene {
                 PropertyValue::Float3s(v) => *v = Vec::new(),
             }
         }
-    }
-
-    /// The extent of one pose.
-    pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
-        extent_of(points, self.extent_padding)
     }
 
     /// Checks a streamed frame against the groom's topology.
@@ -266,6 +233,120 @@ impl CurvesScene {
         }
         Ok(())
     }
+}
+
+/// The properties of one curves prim holding `groom` (all of a groom, or
+/// its guides or render strands).
+fn curves_prim(
+    path: &Path,
+    groom: &Groom,
+    name: &'static str,
+    vertex_ranges: Vec<Range<usize>>,
+) -> Result<CurvesPrim, ExportError> {
+    let invalid = |message: String| ExportError::Invalid {
+        file: path.to_path_buf(),
+        message,
+    };
+    let (curve_type, basis) = match groom.basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::Bspline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+        other => {
+            return Err(ExportError::Unsupported {
+                file: path.to_path_buf(),
+                message: format!("USD BasisCurves have no {} basis", other.name()),
+            })
+        }
+    };
+    let counts = groom
+        .strand_vertex_counts
+        .iter()
+        .map(|&c| i32::try_from(c).map_err(|_| invalid(format!("strand of {c} points"))))
+        .collect::<Result<Vec<i32>, ExportError>>()?;
+
+    let mut properties = vec![
+        token_property("type", curve_type),
+        token_property("wrap", wrap_of(groom)),
+        Property {
+            name: "curveVertexCounts".into(),
+            type_name: "int[]",
+            uniform: false,
+            interpolation: None,
+            value: PropertyValue::Ints(counts),
+        },
+        Property {
+            name: "points".into(),
+            type_name: "point3f[]",
+            uniform: false,
+            interpolation: None,
+            value: PropertyValue::Float3s(groom.points.clone()),
+        },
+    ];
+    if let Some(basis) = basis {
+        properties.push(token_property("basis", basis));
+    }
+    let mut max_width = 0.0f32;
+    for attribute in &groom.attributes {
+        let interpolation = match attribute.scope {
+            Scope::Vertex => "vertex",
+            Scope::Strand => "uniform",
+        };
+        let (name, type_name, value) = match (&attribute.name[..], &attribute.values) {
+            ("width", AttributeValues::Float(v)) => {
+                max_width = v.iter().fold(max_width, |m, &w| m.max(w.abs()));
+                (
+                    "widths".to_string(),
+                    "float[]",
+                    PropertyValue::Floats(v.clone()),
+                )
+            }
+            ("root_uv", AttributeValues::Vec2(v)) => (
+                "primvars:st".to_string(),
+                "texCoord2f[]",
+                PropertyValue::Float2s(v.clone()),
+            ),
+            (attribute_name, values) => {
+                let name = format!("primvars:{}", identifier(attribute_name));
+                let type_name = declared_type(groom, attribute_name, values);
+                match values {
+                    AttributeValues::Float(v) => {
+                        (name, type_name, PropertyValue::Floats(v.clone()))
+                    }
+                    AttributeValues::Vec2(v) => {
+                        (name, type_name, PropertyValue::Float2s(v.clone()))
+                    }
+                    AttributeValues::Vec3(v) => {
+                        (name, type_name, PropertyValue::Float3s(v.clone()))
+                    }
+                    AttributeValues::Int(v) => (name, type_name, PropertyValue::Ints(v.clone())),
+                }
+            }
+        };
+        let name = unique_name(&properties, name);
+        properties.push(Property {
+            name,
+            type_name,
+            uniform: false,
+            interpolation: Some(interpolation),
+            value,
+        });
+    }
+    let extent_padding = max_width * 0.5;
+    properties.push(Property {
+        name: "extent".into(),
+        type_name: "float3[]",
+        uniform: false,
+        interpolation: None,
+        value: PropertyValue::Float3s(extent_of(&groom.points, extent_padding).to_vec()),
+    });
+    properties.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(CurvesPrim {
+        name,
+        properties,
+        vertex_ranges,
+        extent_padding,
+    })
 }
 
 /// The time code of a time in seconds. Codes within 1e-9 of a whole number
