@@ -477,6 +477,22 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                 back.attribute("group_id").is_none(),
                 "{stem}.{ext}: the split is no group"
             );
+            if ext == "gltf" {
+                let document: serde_json::Value =
+                    serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+                let primitives = document["meshes"][0]["primitives"].as_array().unwrap();
+                assert_eq!(
+                    primitives.len(),
+                    2,
+                    "{stem}.gltf: guides and render primitives"
+                );
+                for (primitive, vertices) in primitives.iter().zip([18, 36]) {
+                    let position = primitive["attributes"]["POSITION"].as_u64().unwrap();
+                    assert_eq!(document["accessors"][position as usize]["count"], vertices);
+                    let targets = primitive["targets"].as_array().map_or(0, |t| t.len());
+                    assert_eq!(targets, groom.frames.len(), "{stem}.gltf morph targets");
+                }
+            }
             let label = format!("guides_split_{stem}");
             let frames = groom.frames.len();
             let expect = if ext.starts_with("usd") {
@@ -492,7 +508,7 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                 }
                 expect
             } else {
-                json!({"primitives": 2, "morph_targets": frames})
+                json!({"kind": "gltf", "primitives": 2, "vertices": 54, "morph_targets": frames > 0})
             };
             hand_to_validators(&path, &label, expect);
         }
