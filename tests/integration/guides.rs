@@ -449,7 +449,13 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
         (source_guides.strand_count(), source_render.strand_count()),
         (3, 6)
     );
-    for (groom, stem) in [(&source, "static"), (&animated, "animated")] {
+    // Guides among the render strands: each role is written in groom order.
+    let interleaved = animated.subset(&[3, 0, 4, 5, 1, 6, 7, 8, 2]);
+    for (groom, stem) in [
+        (&source, "static"),
+        (&animated, "animated"),
+        (&interleaved, "interleaved"),
+    ] {
         for ext in ["usda", "usdc", "glb", "gltf"] {
             let path = dir.path(&format!("{stem}.{ext}"));
             exporters::write(&path, groom).unwrap_or_else(|e| panic!("{stem}.{ext}: {e}"));
@@ -477,6 +483,12 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                 back.attribute("group_id").is_none(),
                 "{stem}.{ext}: the split is no group"
             );
+            if ext == "usda" {
+                let text = std::fs::read_to_string(&path).unwrap();
+                for prim in ["def BasisCurves \"guides\"", "def BasisCurves \"render\""] {
+                    assert_eq!(text.matches(prim).count(), 1, "{stem}.usda: {prim}");
+                }
+            }
             if ext == "gltf" {
                 let document: serde_json::Value =
                     serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
@@ -492,6 +504,9 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                     let targets = primitive["targets"].as_array().map_or(0, |t| t.len());
                     assert_eq!(targets, groom.frames.len(), "{stem}.gltf morph targets");
                 }
+            }
+            if stem == "interleaved" {
+                continue;
             }
             let label = format!("guides_split_{stem}");
             let frames = groom.frames.len();
