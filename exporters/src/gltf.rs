@@ -7,7 +7,10 @@
 //!
 //! The groom becomes one mesh with one `LINES` primitive (a segment per pair
 //! of consecutive strand points; a one-point strand is a segment from its
-//! point to itself), in metres and Y up as glTF requires.
+//! point to itself), in metres and Y up as glTF requires. A groom with
+//! guides and render strands (`groom_guide`) becomes two primitives, the
+//! guides then the render strands, whose accessors are windows of shared
+//! views.
 //! The root UVs (`root_uv`, 2 floats) are `TEXCOORD_0`, which every glTF
 //! client reads, with V flipped to glTF's top-left texture origin. Other
 //! attributes are scalar `_NAME` accessors (upper-case name; per-strand

@@ -1,4 +1,5 @@
-//! USD export: one `BasisCurves` prim under an `Xform` root, written as text
+//! USD export: one `BasisCurves` prim under an `Xform` root (two, `guides`
+//! and `render`, for a groom with guides and render strands), written as text
 //! (`.usda`, [`usda`]) or as a binary crate file (`.usdc`/`.usd`,
 //! [`crate_writer`]).
 //!
