@@ -9,7 +9,7 @@ checks prim types, curve and point counts (at the default time and at every
 time sample), widths and primvar sizes against their interpolation
 (`ComputeInterpolationForSize`), the authored extent against the one usd-core
 computes, the time-code range, and the expectations the test wrote beside
-the file in `<file>.expect.json` (keys: curves, points, first_point,
+the file in `<file>.expect.json` (keys: curves, points, prims, first_point,
 meters_per_unit, up_axis, basis, time_samples, start_time_code,
 end_time_code, time_codes_per_second, widths, primvars, and sample_points:
 `[time code, point index, [x, y, z]]` items checked in the first curves prim).
@@ -179,6 +179,25 @@ def check_file(path):
                 fail(f"{prim_path}: primvar {name} is {primvars[name].GetInterpolation()}, "
                      f"expected {interpolation}")
 
+    # "prims": {path: {"curves": n, "groom_guide": 0 or 1}}: the curves
+    # prims a groom's guides and render strands are written to.
+    found = {str(c.GetPath()): c for c in curves_prims}
+    for path, wanted in expect.get("prims", {}).items():
+        curves = found.get(path)
+        if curves is None:
+            fail(f"no curves prim {path} (found {sorted(found)})")
+            continue
+        counts = curves.GetCurveVertexCountsAttr().Get() or []
+        if "curves" in wanted and len(counts) != wanted["curves"]:
+            fail(f"{path}: {len(counts)} curves, expected {wanted['curves']}")
+        if "groom_guide" in wanted:
+            primvar = UsdGeom.PrimvarsAPI(curves).GetPrimvar("groom_guide")
+            values = primvar.ComputeFlattened() if primvar else None
+            if values is None or len(values) != len(counts) or any(
+                    v != wanted["groom_guide"] for v in values):
+                fail(f"{path}: groom_guide is not {wanted['groom_guide']} on every curve")
+    if "prims" in expect and len(found) != len(expect["prims"]):
+        fail(f"curves prims {sorted(found)}, expected {sorted(expect['prims'])}")
     if "curves" in expect and total_curves != expect["curves"]:
         fail(f"{total_curves} curves, expected {expect['curves']}")
     if "points" in expect and total_points != expect["points"]:

@@ -7,7 +7,10 @@
 //!
 //! The groom becomes one mesh with one `LINES` primitive (a segment per pair
 //! of consecutive strand points; a one-point strand is a segment from its
-//! point to itself), in metres and Y up as glTF requires.
+//! point to itself), in metres and Y up as glTF requires. A groom with
+//! guides and render strands (`groom_guide`) becomes two primitives, the
+//! guides then the render strands, whose accessors are windows of shared
+//! views.
 //! The root UVs (`root_uv`, 2 floats) are `TEXCOORD_0`, which every glTF
 //! client reads, with V flipped to glTF's top-left texture origin. Other
 //! attributes are scalar `_NAME` accessors (upper-case name; per-strand
@@ -66,19 +69,32 @@ struct EncodedAttribute {
     extras: Value,
 }
 
+/// One primitive: a run of the (reordered) vertices and of the indices.
+struct Part {
+    vertices: std::ops::Range<usize>,
+    indices: std::ops::Range<usize>,
+    rest_bounds: ([f32; 3], [f32; 3]),
+}
+
 pub struct GltfWriter {
     path: PathBuf,
     binary: bool,
     /// Maps the groom's units and up axis to metres, Y up.
     scale: f32,
     up: UpAxis,
+    /// The groom's vertex ranges in the order they are written (guides,
+    /// then render strands); `None` when written in the groom's order.
+    order: Option<Vec<std::ops::Range<usize>>>,
+    /// One primitive, or the guides and the render strands.
+    parts: Vec<Part>,
     rest: Vec<[f32; 3]>,
-    rest_bounds: ([f32; 3], [f32; 3]),
+    /// Indices of each part, counted from the part's first vertex.
     indices: Vec<u32>,
     attributes: Vec<EncodedAttribute>,
     spill: BufWriter<File>,
     frame_times: Vec<f32>,
-    frame_bounds: Vec<([f32; 3], [f32; 3])>,
+    /// Per frame, the bounds of each part's deltas.
+    frame_bounds: Vec<Vec<([f32; 3], [f32; 3])>>,
 }
 
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
@@ -112,27 +128,64 @@ fn start(path: &Path, groom: &Groom) -> Result<GltfWriter, ExportError> {
         up_axis: groom.up_axis,
         ..Groom::default()
     };
+    // Guides and render strands become two primitives: the guides' strands
+    // are written first, then the render strands'.
+    let mut order = None;
+    let mut part_strands = vec![rest.strand_count()];
+    if let Some(split) = rest.split_guides().filter(|_| rest.has_render_split()) {
+        let offsets = rest.strand_offsets();
+        let strands: Vec<usize> = split
+            .guide_indices
+            .iter()
+            .chain(&split.render_indices)
+            .copied()
+            .collect();
+        let mut ranges: Vec<std::ops::Range<usize>> = Vec::new();
+        for &strand in &strands {
+            let range = offsets[strand]..offsets[strand + 1];
+            match ranges.last_mut() {
+                Some(last) if last.end == range.start => last.end = range.end,
+                _ => ranges.push(range),
+            }
+        }
+        part_strands = vec![split.guide_indices.len(), split.render_indices.len()];
+        rest = rest.subset(&strands);
+        order = Some(ranges);
+    }
     rest.convert_to(Units::METERS, UpAxis::Y);
-    let rest_bounds =
-        groom::bounds_of(&rest.points).ok_or_else(|| invalid(path, "the groom has no points"))?;
 
     let mut indices = Vec::new();
-    let mut first = 0u32;
-    for &count in &groom.strand_vertex_counts {
-        // A one-point strand (an empty root of USC-HairSalon) becomes a
-        // degenerate segment, so that it survives the round trip.
-        if count == 1 {
-            indices.extend([first, first]);
+    let mut parts = Vec::new();
+    let mut counts = rest.strand_vertex_counts.iter();
+    let mut part_start = 0usize;
+    for strands in part_strands {
+        let index_start = indices.len();
+        let mut first = 0u32;
+        for &count in counts.by_ref().take(strands) {
+            // A one-point strand (an empty root of USC-HairSalon) becomes a
+            // degenerate segment, so that it survives the round trip.
+            if count == 1 {
+                indices.extend([first, first]);
+            }
+            for k in 1..count {
+                indices.push(first + k - 1);
+                indices.push(first + k);
+            }
+            first = first
+                .checked_add(count)
+                .ok_or_else(|| invalid(path, "more points than glTF indices can address"))?;
         }
-        for k in 1..count {
-            indices.push(first + k - 1);
-            indices.push(first + k);
-        }
-        first = first
-            .checked_add(count)
-            .ok_or_else(|| invalid(path, "more points than glTF indices can address"))?;
+        let vertices = part_start..part_start + first as usize;
+        let rest_bounds = groom::bounds_of(&rest.points[vertices.clone()])
+            .ok_or_else(|| invalid(path, "the groom has no points"))?;
+        parts.push(Part {
+            vertices,
+            indices: index_start..indices.len(),
+            rest_bounds,
+        });
+        part_start += first as usize;
     }
-    if indices.is_empty() {
+    if parts.iter().any(|p| p.indices.is_empty()) {
         return Err(invalid(path, "the groom has no segments to draw as lines"));
     }
     let attributes = encode_attributes(&rest);
@@ -148,8 +201,9 @@ fn start(path: &Path, groom: &Groom) -> Result<GltfWriter, ExportError> {
         binary,
         scale: (groom.units.meters_per_unit) as f32,
         up: groom.up_axis,
+        order,
+        parts,
         rest: rest.points,
-        rest_bounds,
         indices,
         attributes,
         spill: BufWriter::with_capacity(1 << 20, spill),
@@ -356,10 +410,31 @@ impl FrameWriter for GltfWriter {
                 format!("frame {index}: time {} does not increase", frame.time),
             ));
         }
+        let reordered: Vec<[f32; 3]>;
+        let points = match &self.order {
+            Some(ranges) => {
+                reordered = ranges
+                    .iter()
+                    .flat_map(|r| frame.points[r.clone()].iter().copied())
+                    .collect();
+                &reordered[..]
+            }
+            None => &frame.points[..],
+        };
+        let mut bounds = Vec::with_capacity(self.parts.len());
         let mut min = [f32::INFINITY; 3];
         let mut max = [f32::NEG_INFINITY; 3];
         let mut bytes = Vec::with_capacity(12 * frame.points.len());
-        for (vertex, (p, rest)) in frame.points.iter().zip(&self.rest).enumerate() {
+        for (vertex, (p, rest)) in points.iter().zip(&self.rest).enumerate() {
+            if self
+                .parts
+                .iter()
+                .any(|part| part.vertices.start == vertex && vertex > 0)
+            {
+                bounds.push((min, max));
+                min = [f32::INFINITY; 3];
+                max = [f32::NEG_INFINITY; 3];
+            }
             let moved = self.up.to_y_up(*p).map(|c| c * self.scale);
             let mut delta = [0.0f32; 3];
             for k in 0..3 {
@@ -378,8 +453,9 @@ impl FrameWriter for GltfWriter {
         self.spill
             .write_all(&bytes)
             .map_err(|e| ExportError::io(&self.path, e))?;
+        bounds.push((min, max));
         self.frame_times.push(time);
-        self.frame_bounds.push((min, max));
+        self.frame_bounds.push(bounds);
         Ok(())
     }
 
@@ -419,7 +495,6 @@ fn vec3_json(v: [f32; 3]) -> Value {
 impl GltfWriter {
     fn json(&self, layout: &Layout) -> Value {
         let frames = self.frame_times.len();
-        let vertices = self.rest.len();
         let mut views = Vec::new();
         let mut accessors = Vec::new();
         let mut part = layout.parts.iter();
@@ -435,36 +510,78 @@ impl GltfWriter {
             views.push(v);
             views.len() - 1
         };
-        let position_view = view(Some(ARRAY_BUFFER), None);
-        accessors.push(json!({
-            "bufferView": position_view, "componentType": FLOAT, "count": vertices, "type": "VEC3",
-            "min": vec3_json(self.rest_bounds.0), "max": vec3_json(self.rest_bounds.1),
-        }));
+        // A vertex view that several primitives' accessors share must say
+        // its stride.
+        let shared = self.parts.len() > 1;
+        let position_view = view(Some(ARRAY_BUFFER), shared.then_some(12));
         let index_view = view(Some(ELEMENT_ARRAY_BUFFER), None);
-        accessors.push(json!({
-            "bufferView": index_view, "componentType": UNSIGNED_INT, "count": self.indices.len(), "type": "SCALAR",
-        }));
-        let mut attributes = serde_json::Map::new();
-        attributes.insert("POSITION".into(), json!(0));
-        for attribute in &self.attributes {
-            let stride = (attribute.component_type != FLOAT).then_some(attribute.stride);
-            let v = view(Some(ARRAY_BUFFER), stride);
-            accessors.push(json!({
-                "bufferView": v, "componentType": attribute.component_type, "count": vertices,
-                "type": attribute.accessor_type, "extras": attribute.extras,
-            }));
-            attributes.insert(attribute.semantic.clone(), json!(accessors.len() - 1));
+        let attribute_views: Vec<usize> = self
+            .attributes
+            .iter()
+            .map(|a| {
+                let stride = shared || a.component_type != FLOAT;
+                view(Some(ARRAY_BUFFER), stride.then_some(a.stride))
+            })
+            .collect();
+        let frame_views: Vec<usize> = (0..frames)
+            .map(|_| view(Some(ARRAY_BUFFER), shared.then_some(12)))
+            .collect();
+        // Each part's accessors are windows of the shared views.
+        let window = |mut accessor: Value, offset: usize| {
+            if offset > 0 {
+                accessor["byteOffset"] = json!(offset);
+            }
+            accessor
+        };
+        let mut primitives = Vec::new();
+        let mut part_targets = Vec::new();
+        for part in &self.parts {
+            let count = part.vertices.len();
+            let start = part.vertices.start;
+            accessors.push(window(
+                json!({
+                    "bufferView": position_view, "componentType": FLOAT, "count": count, "type": "VEC3",
+                    "min": vec3_json(part.rest_bounds.0), "max": vec3_json(part.rest_bounds.1),
+                }),
+                12 * start,
+            ));
+            let position = accessors.len() - 1;
+            accessors.push(window(
+                json!({
+                    "bufferView": index_view, "componentType": UNSIGNED_INT, "count": part.indices.len(), "type": "SCALAR",
+                }),
+                4 * part.indices.start,
+            ));
+            let index = accessors.len() - 1;
+            let mut attributes = serde_json::Map::new();
+            attributes.insert("POSITION".into(), json!(position));
+            for (attribute, &v) in self.attributes.iter().zip(&attribute_views) {
+                accessors.push(window(
+                    json!({
+                        "bufferView": v, "componentType": attribute.component_type, "count": count,
+                        "type": attribute.accessor_type, "extras": attribute.extras,
+                    }),
+                    attribute.stride * start,
+                ));
+                attributes.insert(attribute.semantic.clone(), json!(accessors.len() - 1));
+            }
+            primitives.push(json!({"attributes": attributes, "indices": index, "mode": LINES}));
+            part_targets.push(Vec::new());
         }
-        let mut targets = Vec::new();
-        for (min, max) in &self.frame_bounds {
-            let v = view(Some(ARRAY_BUFFER), None);
-            accessors.push(json!({
-                "bufferView": v, "componentType": FLOAT, "count": vertices, "type": "VEC3",
-                "min": vec3_json(*min), "max": vec3_json(*max),
-            }));
-            targets.push(json!({"POSITION": accessors.len() - 1}));
+        for (bounds, &v) in self.frame_bounds.iter().zip(&frame_views) {
+            for ((part, (min, max)), targets) in
+                self.parts.iter().zip(bounds).zip(&mut part_targets)
+            {
+                accessors.push(window(
+                    json!({
+                        "bufferView": v, "componentType": FLOAT, "count": part.vertices.len(), "type": "VEC3",
+                        "min": vec3_json(*min), "max": vec3_json(*max),
+                    }),
+                    12 * part.vertices.start,
+                ));
+                targets.push(json!({"POSITION": accessors.len() - 1}));
+            }
         }
-        let mut primitive = json!({"attributes": attributes, "indices": 1, "mode": LINES});
         let mut mesh = json!({"name": "groom"});
         let mut document = json!({
             "asset": {"version": "2.0", "generator": concat!("groombake ", env!("CARGO_PKG_VERSION"))},
@@ -473,7 +590,9 @@ impl GltfWriter {
             "nodes": [{"mesh": 0, "name": "groom"}],
         });
         if frames > 0 {
-            primitive["targets"] = json!(targets);
+            for (primitive, targets) in primitives.iter_mut().zip(part_targets) {
+                primitive["targets"] = json!(targets);
+            }
             mesh["weights"] = json!(vec![0.0; frames]);
             let names: Vec<String> = (0..frames).map(|k| format!("frame_{k}")).collect();
             mesh["extras"] = json!({"targetNames": names});
@@ -494,7 +613,7 @@ impl GltfWriter {
                 "channels": [{"sampler": 0, "target": {"node": 0, "path": "weights"}}],
             }]);
         }
-        mesh["primitives"] = json!([primitive]);
+        mesh["primitives"] = json!(primitives);
         document["meshes"] = json!([mesh]);
         document["accessors"] = json!(accessors);
         document["bufferViews"] = json!(views);

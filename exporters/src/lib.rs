@@ -267,8 +267,9 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
         AttributeValues::Int(codes) => codes.iter().any(|&c| Some(&c) != codes.first()),
         _ => false,
     });
-    // Static USD writes one prim per curve type (usd::PrimKey).
-    let grouped = usd && groom.frames.is_empty();
+    // USD writes one prim per curve type and wrap (usd::PrimKey), static
+    // and animated alike.
+    let grouped = usd;
     if bases == Some(true) && !grouped {
         warnings.push(format!(
             "{file}: strands of several curve types (curve_basis): all written as {}",

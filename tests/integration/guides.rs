@@ -484,3 +484,126 @@ fn render_hair_grows_on_a_scalp_mesh() {
     let e = dir.run_fail(&["validate", "bad.toml"], 2);
     assert!(e.contains("scalp mesh") && e.contains("nowhere.obj"), "{e}");
 }
+
+/// The guides and the render strands of a groom, each as a groom, with
+/// their frames, in metres and Y up (as glTF holds them).
+fn roles(groom: &Groom) -> (Groom, Groom) {
+    let mut groom = groom.clone();
+    groom.convert_to(groom::Units::METERS, groom::UpAxis::Y);
+    let split = groom.split_guides().expect("groom_guide per strand");
+    (split.guides, split.render)
+}
+
+/// USD writes guides and render strands as two BasisCurves prims under the
+/// root, glTF as two primitives of one mesh; each reads back as one groom
+/// with the split, the points and the frames of each role intact.
+#[test]
+fn usd_and_gltf_keep_guides_and_render_strands_apart() {
+    let dir = TestDir::new();
+    let source = read(&unreal_fixture());
+    let mut animated = source.clone();
+    animated.frames = (1..=3)
+        .map(|k| groom::Frame {
+            time: k as f64 / 24.0,
+            points: source
+                .points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| [p[0] + 0.01 * k as f32, p[1], p[2] - 0.001 * (i % 5) as f32])
+                .collect(),
+        })
+        .collect();
+    let (source_guides, source_render) = roles(&animated);
+    assert_eq!(
+        (source_guides.strand_count(), source_render.strand_count()),
+        (3, 6)
+    );
+    // Guides among the render strands: each role is written in groom order.
+    let interleaved = animated.subset(&[3, 0, 4, 5, 1, 6, 7, 8, 2]);
+    for (groom, stem) in [
+        (&source, "static"),
+        (&animated, "animated"),
+        (&interleaved, "interleaved"),
+    ] {
+        for ext in ["usda", "usdc", "glb", "gltf"] {
+            let path = dir.path(&format!("{stem}.{ext}"));
+            exporters::write(&path, groom).unwrap_or_else(|e| panic!("{stem}.{ext}: {e}"));
+            let back = read(&path);
+            let (guides, render) = roles(&back);
+            let (want_guides, want_render) = roles(groom);
+            for (role, got, want) in [
+                ("guides", &guides, &want_guides),
+                ("render", &render, &want_render),
+            ] {
+                let what = format!("{stem}.{ext} {role}");
+                assert_eq!(
+                    got.strand_vertex_counts, want.strand_vertex_counts,
+                    "{what}"
+                );
+                assert_points_close(&got.points, &want.points, &what);
+                assert_eq!(got.frames.len(), want.frames.len(), "{what}");
+                for (a, b) in got.frames.iter().zip(&want.frames) {
+                    assert!((a.time - b.time).abs() < 1e-6, "{what}");
+                    assert_points_close(&a.points, &b.points, &what);
+                }
+            }
+            assert_eq!(back.guide_flags().map(|f| f.len()), Some(9), "{stem}.{ext}");
+            assert!(
+                back.attribute("group_id").is_none(),
+                "{stem}.{ext}: the split is no group"
+            );
+            if ext == "usda" {
+                let text = std::fs::read_to_string(&path).unwrap();
+                for prim in ["def BasisCurves \"guides\"", "def BasisCurves \"render\""] {
+                    assert_eq!(text.matches(prim).count(), 1, "{stem}.usda: {prim}");
+                }
+            }
+            if ext == "gltf" {
+                let document: serde_json::Value =
+                    serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+                let primitives = document["meshes"][0]["primitives"].as_array().unwrap();
+                assert_eq!(
+                    primitives.len(),
+                    2,
+                    "{stem}.gltf: guides and render primitives"
+                );
+                for (primitive, vertices) in primitives.iter().zip([18, 36]) {
+                    let position = primitive["attributes"]["POSITION"].as_u64().unwrap();
+                    assert_eq!(document["accessors"][position as usize]["count"], vertices);
+                    let targets = primitive["targets"].as_array().map_or(0, |t| t.len());
+                    assert_eq!(targets, groom.frames.len(), "{stem}.gltf morph targets");
+                }
+            }
+            if stem == "interleaved" {
+                continue;
+            }
+            let label = format!("guides_split_{stem}");
+            let frames = groom.frames.len();
+            let expect = if ext.starts_with("usd") {
+                let mut expect = json!({
+                    "kind": "usd", "curves": 9, "points": 54,
+                    "prims": {
+                        "/Groom/guides": {"curves": 3, "groom_guide": 1},
+                        "/Groom/render": {"curves": 6, "groom_guide": 0},
+                    },
+                });
+                if frames > 0 {
+                    expect["time_samples"] = json!(frames);
+                }
+                expect
+            } else {
+                json!({"kind": "gltf", "primitives": 2, "vertices": 54, "morph_targets": frames > 0})
+            };
+            hand_to_validators(&path, &label, expect);
+        }
+    }
+}
+
+fn assert_points_close(got: &[[f32; 3]], want: &[[f32; 3]], what: &str) {
+    assert_eq!(got.len(), want.len(), "{what}: point count");
+    for (a, b) in got.iter().zip(want) {
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() < 1e-6, "{what}: {a:?} != {b:?}");
+        }
+    }
+}

@@ -11,7 +11,7 @@
 //! sections use the integer coding (deltas, 2-bit width codes) inside an LZ4
 //! block made only of literals, which any LZ4 decoder accepts.
 
-use super::{time_code, CurvesScene, PropertyValue, CURVES_PRIM, ROOT_PRIM};
+use super::{time_code, CurvesScene, PropertyValue, ROOT_PRIM};
 use crate::{ExportError, FrameWriter};
 use groom::{AtomicFile, Frame};
 use std::collections::BTreeMap;
@@ -66,22 +66,17 @@ fn inlined(type_id: u8, payload: u64) -> u64 {
     value_rep(type_id, false, true, payload)
 }
 
-/// Writes the curves prims `scenes` (name and scene; the first gives the
-/// stage metadata) under the root.
-pub(super) fn write_static(
-    path: &Path,
-    scenes: &[(String, CurvesScene)],
-) -> Result<(), ExportError> {
-    let prims: Vec<(&str, &CurvesScene)> = scenes.iter().map(|(n, s)| (n.as_str(), s)).collect();
-    let writer = CrateWriter::create(path, &prims)?;
-    writer.finish(&prims, None)
+pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
+    let writer = CrateWriter::create(path, scene)?;
+    writer.finish(scene, None)
 }
 
-/// The time samples of `points` and `extent`, one rep of each per frame.
+/// The time samples of `points` and `extent`: per curves prim, one rep
+/// of each per frame.
 struct Samples {
     times: Vec<f64>,
-    points: Vec<u64>,
-    extents: Vec<u64>,
+    points: Vec<Vec<u64>>,
+    extents: Vec<Vec<u64>>,
 }
 
 /// The open file plus the reps of the static property values.
@@ -89,13 +84,14 @@ struct CrateWriter {
     path: PathBuf,
     file: AtomicFile,
     position: u64,
-    /// Rep of each property's default value, by prim index and property name.
+    /// Rep of each property's default value, by prim index and property
+    /// name.
     defaults: BTreeMap<(usize, String), u64>,
     scratch: Vec<u8>,
 }
 
 impl CrateWriter {
-    fn create(path: &Path, prims: &[(&str, &CurvesScene)]) -> Result<CrateWriter, ExportError> {
+    fn create(path: &Path, scene: &CurvesScene) -> Result<CrateWriter, ExportError> {
         let file = AtomicFile::create(path).map_err(|e| ExportError::io(path, e))?;
         let mut writer = CrateWriter {
             path: path.to_path_buf(),
@@ -106,10 +102,11 @@ impl CrateWriter {
         };
         // The bootstrap is written again with the table-of-contents offset.
         writer.write_bytes(&[0u8; BOOTSTRAP_SIZE as usize])?;
-        for (prim, property) in prims
+        for (prim, property) in scene
+            .prims
             .iter()
             .enumerate()
-            .flat_map(|(i, (_, scene))| scene.properties.iter().map(move |p| (i, p)))
+            .flat_map(|(k, p)| p.properties.iter().map(move |q| (k, q)))
         {
             let rep = match &property.value {
                 // Tokens are inlined once their index is known, in `finish`.
@@ -209,32 +206,25 @@ impl CrateWriter {
 
     /// Writes the specs, the structural sections and the table of contents,
     /// then patches the bootstrap and renames the file into place.
-    fn finish(
-        mut self,
-        prims: &[(&str, &CurvesScene)],
-        samples: Option<Samples>,
-    ) -> Result<(), ExportError> {
-        let Some(&(_, scene)) = prims.first() else {
-            return Err(ExportError::Invalid {
-                file: self.path.clone(),
-                message: "no curves to write".into(),
-            });
-        };
+    fn finish(mut self, scene: &CurvesScene, samples: Option<Samples>) -> Result<(), ExportError> {
         let mut layer = Layer::default();
         let mut strings: Vec<u32> = Vec::new();
 
         // Time samples: one shared times vector.
-        let mut sampled: BTreeMap<&str, u64> = BTreeMap::new();
+        let mut sampled: BTreeMap<(usize, &str), u64> = BTreeMap::new();
         let mut time_range = None;
         if let Some(samples) = &samples {
             let mut bytes = (samples.times.len() as u64).to_le_bytes().to_vec();
             bytes.extend(samples.times.iter().flat_map(|t| t.to_le_bytes()));
             let start = self.write_bytes(&bytes)?;
             let times_rep = value_rep(type_id::DOUBLE_VECTOR, false, false, start);
-            let points = self.write_time_samples(times_rep, &samples.points)?;
-            let extents = self.write_time_samples(times_rep, &samples.extents)?;
-            sampled.insert("points", points);
-            sampled.insert("extent", extents);
+            for (prim, (points, extents)) in samples.points.iter().zip(&samples.extents).enumerate()
+            {
+                let points = self.write_time_samples(times_rep, points)?;
+                let extents = self.write_time_samples(times_rep, extents)?;
+                sampled.insert((prim, "points"), points);
+                sampled.insert((prim, "extent"), extents);
+            }
             time_range = samples.times.first().zip(samples.times.last());
         }
 
@@ -262,7 +252,7 @@ impl CrateWriter {
 
         // The Xform root.
         let groom_path = layer.path(Some(root_path), ROOT_PRIM, false);
-        let curves_tokens: Vec<u32> = prims.iter().map(|(name, _)| layer.token(name)).collect();
+        let curves_tokens: Vec<u32> = scene.prims.iter().map(|p| layer.token(&p.name)).collect();
         let xform = layer.token("Xform");
         let fields = [
             ("specifier", inlined(type_id::SPECIFIER, 0)),
@@ -271,73 +261,54 @@ impl CrateWriter {
         ];
         layer.spec(groom_path, SPEC_PRIM, &fields);
 
-        for (prim, &(name, scene)) in prims.iter().enumerate() {
-            self.curves_prim(&mut layer, groom_path, prim, name, scene, &sampled)?;
-        }
-        self.write_structure(layer, &strings)
-    }
+        // The curves prims and their properties.
+        for (index, prim) in scene.prims.iter().enumerate() {
+            let curves_path = layer.path(Some(groom_path), &prim.name, false);
+            let property_tokens: Vec<u32> = prim
+                .properties
+                .iter()
+                .map(|p| layer.token(&p.name))
+                .collect();
+            let basis_curves = layer.token("BasisCurves");
+            let fields = [
+                ("specifier", inlined(type_id::SPECIFIER, 0)),
+                ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
+                ("properties", self.write_token_vector(&property_tokens)?),
+            ];
+            layer.spec(curves_path, SPEC_PRIM, &fields);
 
-    /// One curves prim and its properties; `sampled` holds the time samples
-    /// of the first prim (the only one of an animated export).
-    fn curves_prim(
-        &mut self,
-        layer: &mut Layer,
-        groom_path: u32,
-        prim: usize,
-        name: &str,
-        scene: &CurvesScene,
-        sampled: &BTreeMap<&str, u64>,
-    ) -> Result<(), ExportError> {
-        let curves_path = layer.path(Some(groom_path), name, false);
-        let property_tokens: Vec<u32> = scene
-            .properties
-            .iter()
-            .map(|p| layer.token(&p.name))
-            .collect();
-        let basis_curves = layer.token("BasisCurves");
-        let fields = [
-            ("specifier", inlined(type_id::SPECIFIER, 0)),
-            ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
-            ("properties", self.write_token_vector(&property_tokens)?),
-        ];
-        layer.spec(curves_path, SPEC_PRIM, &fields);
-
-        for property in &scene.properties {
-            let path = layer.path(Some(curves_path), &property.name, true);
-            let type_name = layer.token(property.type_name);
-            let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
-            if property.uniform {
-                fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
-            }
-            if let Some(interpolation) = property.interpolation {
-                let token = layer.token(interpolation);
-                fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
-            }
-            let default = match &property.value {
-                PropertyValue::Token(token) => {
-                    Some(inlined(type_id::TOKEN, layer.token(token).into()))
+            for property in &prim.properties {
+                let path = layer.path(Some(curves_path), &property.name, true);
+                let type_name = layer.token(property.type_name);
+                let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
+                if property.uniform {
+                    fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
                 }
-                _ => self.defaults.get(&(prim, property.name.clone())).copied(),
-            };
-            if let Some(default) = default {
-                fields.push(("default", default));
+                if let Some(interpolation) = property.interpolation {
+                    let token = layer.token(interpolation);
+                    fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
+                }
+                let default = match &property.value {
+                    PropertyValue::Token(token) => {
+                        Some(inlined(type_id::TOKEN, layer.token(token).into()))
+                    }
+                    _ => self.defaults.get(&(index, property.name.clone())).copied(),
+                };
+                if let Some(default) = default {
+                    fields.push(("default", default));
+                }
+                if let Some(&rep) = sampled.get(&(index, property.name.as_str())) {
+                    fields.push(("timeSamples", rep));
+                }
+                layer.spec(path, SPEC_ATTRIBUTE, &fields);
             }
-            if let Some(&rep) = sampled.get(property.name.as_str()).filter(|_| prim == 0) {
-                fields.push(("timeSamples", rep));
-            }
-            layer.spec(path, SPEC_ATTRIBUTE, &fields);
         }
-        Ok(())
-    }
 
-    /// The structural sections and the table of contents; patches the
-    /// bootstrap and renames the file into place.
-    fn write_structure(mut self, layer: Layer, strings: &[u32]) -> Result<(), ExportError> {
         // Structural sections.
         let mut sections: Vec<(&str, u64, u64)> = Vec::new();
         let contents = [
             ("TOKENS", layer.tokens_section()),
-            ("STRINGS", strings_section(strings)),
+            ("STRINGS", strings_section(&strings)),
             ("FIELDS", layer.fields_section()),
             ("FIELDSETS", layer.fieldsets_section()),
             ("PATHS", layer.paths_section()),
@@ -635,16 +606,17 @@ pub(super) struct AnimatedCrate {
 
 impl AnimatedCrate {
     pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedCrate, ExportError> {
-        let writer = CrateWriter::create(path, &[(CURVES_PRIM, &scene)])?;
+        let writer = CrateWriter::create(path, &scene)?;
         // The arrays are in the file; `finish` needs only their reps.
         scene.forget_values();
+        let prims = scene.prims.len();
         Ok(AnimatedCrate {
             writer,
             scene,
             samples: Samples {
                 times: Vec::new(),
-                points: Vec::new(),
-                extents: Vec::new(),
+                points: vec![Vec::new(); prims],
+                extents: vec![Vec::new(); prims],
             },
         })
     }
@@ -661,13 +633,14 @@ impl FrameWriter for AnimatedCrate {
                 message: format!("frame time codes must increase (time code {code})"),
             });
         }
-        let points = self.writer.write_float3s(&frame.points)?;
-        let extent = self
-            .writer
-            .write_float3s(&self.scene.extent(&frame.points))?;
+        for (index, prim) in self.scene.prims.iter().enumerate() {
+            let points = prim.points_of(&frame.points);
+            let points_rep = self.writer.write_float3s(&points)?;
+            let extent_rep = self.writer.write_float3s(&prim.extent(&points))?;
+            self.samples.points[index].push(points_rep);
+            self.samples.extents[index].push(extent_rep);
+        }
         self.samples.times.push(code);
-        self.samples.points.push(points);
-        self.samples.extents.push(extent);
         Ok(())
     }
 
@@ -679,7 +652,6 @@ impl FrameWriter for AnimatedCrate {
                 message: "an animated export needs at least one frame".into(),
             });
         }
-        this.writer
-            .finish(&[(CURVES_PRIM, &this.scene)], Some(this.samples))
+        this.writer.finish(&this.scene, Some(this.samples))
     }
 }

@@ -1,7 +1,8 @@
-//! USD export: `BasisCurves` prims under an `Xform` root (one prim, or for a
-//! static groom mixing curve types one per [`PrimKey`]), written as text
+//! USD export: `BasisCurves` prims under an `Xform` root, written as text
 //! (`.usda`, [`usda`]) or as a binary crate file (`.usdc`/`.usd`,
-//! [`crate_writer`]).
+//! [`crate_writer`]). One `Strands` prim; a groom with guides and render
+//! strands gets `guides` and `render`, and one that mixes curve types or
+//! wraps one prim per [`PrimKey`] (static and animated alike).
 //!
 //! Both writers take the same [`CurvesScene`]: the stage metadata and every
 //! property of the curves prim, sorted by name so the bytes never depend on
@@ -12,12 +13,18 @@ mod usda;
 
 use crate::{AnimationOptions, ExportError, FrameWriter};
 use groom::{AttributeValues, CurveBasis, Frame, Groom, Scope};
+use std::borrow::Cow;
+use std::ops::Range;
 use std::path::Path;
 
 /// Name of the root `Xform` (the stage's `defaultPrim`).
 pub(crate) const ROOT_PRIM: &str = "Groom";
 /// Name of the `BasisCurves` prim under the root.
 pub(crate) const CURVES_PRIM: &str = "Strands";
+/// The prims of a groom with guides and render strands (`groom_guide` 1
+/// and 0), in this order.
+pub(crate) const GUIDES_PRIM: &str = "guides";
+pub(crate) const RENDER_PRIM: &str = "render";
 
 /// Frames per second used when a groom with frames is written through
 /// [`crate::write`], which has no [`AnimationOptions`].
@@ -36,6 +43,9 @@ pub enum Encoding {
 /// hair) is one more field here and one more part of [`PrimKey::name`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub(crate) struct PrimKey {
+    /// Guides (0) before render strands (1) in a groom that holds both
+    /// (per-strand `groom_guide`); 0 for any other groom.
+    pub role: u8,
     /// The per-strand `curve_basis` code the importers give grooms that
     /// mix bases (0 linear, 1 bezier, 2 bspline, 3 catmullRom, 4 hermite,
     /// 5 power).
@@ -68,17 +78,27 @@ impl PrimKey {
             .and_then(|i| WRAPS.get(i).copied())
     }
 
-    /// The prim's name: `Strands_<basis>`, then `_<wrap>` unless nonperiodic.
-    fn name(self) -> String {
+    /// The prim's name: `guides` or `render` for a groom split in roles,
+    /// else `Strands`; then, for a groom that mixes curves, `_<basis>` and
+    /// `_<wrap>` unless nonperiodic.
+    fn name(self, split_roles: bool, mixed_curves: bool) -> String {
+        let stem = match (split_roles, self.role) {
+            (false, _) => CURVES_PRIM,
+            (true, 0) => GUIDES_PRIM,
+            (true, _) => RENDER_PRIM,
+        };
+        if !mixed_curves {
+            return stem.to_string();
+        }
         let basis = match self.basis() {
             Some(CurveBasis::CatmullRom) => "catmullRom".to_string(),
             Some(basis) => basis.name().to_string(),
             None => format!("basis{}", self.basis_code),
         };
         match self.wrap() {
-            Some("nonperiodic") => format!("{CURVES_PRIM}_{basis}"),
-            Some(wrap) => format!("{CURVES_PRIM}_{basis}_{wrap}"),
-            None => format!("{CURVES_PRIM}_{basis}_wrap{}", self.wrap_code),
+            Some("nonperiodic") => format!("{stem}_{basis}"),
+            Some(wrap) => format!("{stem}_{basis}_{wrap}"),
+            None => format!("{stem}_{basis}_wrap{}", self.wrap_code),
         }
     }
 }
@@ -95,20 +115,19 @@ fn strand_codes<'g>(groom: &'g Groom, name: &str) -> Option<&'g [i32]> {
     }
 }
 
-/// The strands of each prim: `None` for a groom of one kind of curve
-/// (written as one `Strands` prim), else one group per [`PrimKey`], in the
-/// order of each group's first strand.
-fn prim_groups(groom: &Groom) -> Option<Vec<(PrimKey, Vec<usize>)>> {
+/// The strands of each prim, one group per [`PrimKey`]: guides before
+/// render strands, otherwise in the order of each group's first strand.
+/// Also says whether roles and curve kinds were split (for the names).
+fn prim_groups(groom: &Groom) -> (Vec<(PrimKey, Vec<usize>)>, bool, bool) {
     let bases = strand_codes(groom, "curve_basis");
     let wraps = strand_codes(groom, "curve_wrap");
-    if bases.is_none() && wraps.is_none() {
-        return None;
-    }
+    let roles = groom.guide_flags().filter(|_| groom.has_render_split());
     let basis_default = BASES.iter().position(|&b| b == groom.basis).unwrap_or(0) as i32;
     let wrap_default = WRAPS.iter().position(|&w| w == wrap_of(groom)).unwrap_or(0) as i32;
     let mut groups: Vec<(PrimKey, Vec<usize>)> = Vec::new();
     for strand in 0..groom.strand_count() {
         let key = PrimKey {
+            role: roles.as_ref().map_or(0, |r| u8::from(!r[strand])),
             basis_code: bases.map_or(basis_default, |c| c[strand]),
             wrap_code: wraps.map_or(wrap_default, |c| c[strand]),
         };
@@ -117,36 +136,21 @@ fn prim_groups(groom: &Groom) -> Option<Vec<(PrimKey, Vec<usize>)>> {
             None => groups.push((key, vec![strand])),
         }
     }
-    (groups.len() > 1).then_some(groups)
+    groups.sort_by_key(|(key, _)| key.role);
+    let mixed_curves = (bases.is_some() || wraps.is_some())
+        && groups.iter().any(|(k, _)| {
+            (k.basis_code, k.wrap_code) != (groups[0].0.basis_code, groups[0].0.wrap_code)
+        });
+    (groups, roles.is_some(), mixed_curves)
 }
 
 /// Writes a static groom, or an animated one when it has frames.
 pub fn write(path: &Path, groom: &Groom, encoding: Encoding) -> Result<(), ExportError> {
     if groom.frames.is_empty() {
-        let scenes = match prim_groups(groom) {
-            None => vec![(
-                CURVES_PRIM.to_string(),
-                CurvesScene::new(path, groom, None)?,
-            )],
-            Some(groups) => {
-                let mut scenes = Vec::with_capacity(groups.len());
-                for (key, strands) in groups {
-                    let mut part = groom.select_strands(&strands);
-                    part.basis = key.basis().unwrap_or(groom.basis);
-                    part.remove_attribute("curve_basis");
-                    part.remove_attribute("curve_wrap");
-                    let wrap = key.wrap().unwrap_or("nonperiodic");
-                    part.provenance
-                        .metadata
-                        .insert("usd.wrap".into(), wrap.into());
-                    scenes.push((key.name(), CurvesScene::new(path, &part, None)?));
-                }
-                scenes
-            }
-        };
+        let scene = CurvesScene::new(path, groom, None)?;
         return match encoding {
-            Encoding::Text => usda::write_static(path, &scenes),
-            Encoding::Crate => crate_writer::write_static(path, &scenes),
+            Encoding::Text => usda::write_static(path, &scene),
+            Encoding::Crate => crate_writer::write_static(path, &scene),
         };
     }
     let options = AnimationOptions {
@@ -208,131 +212,96 @@ pub(crate) struct Timing {
     pub fps: f64,
 }
 
+/// One `BasisCurves` prim under the root.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CurvesPrim {
+    pub name: String,
+    /// Sorted by name; includes `points` and `extent` of the rest pose.
+    pub properties: Vec<Property>,
+    /// The groom's vertices this prim holds, in order (a frame's points
+    /// for this prim are these ranges of the frame).
+    pub vertex_ranges: Vec<Range<usize>>,
+    /// Half the largest width: the extent grows by it, as USD's own
+    /// `UsdGeomCurves::ComputeExtent` does.
+    pub extent_padding: f32,
+}
+
+impl CurvesPrim {
+    /// This prim's points of a pose of the whole groom.
+    pub fn points_of<'a>(&self, points: &'a [[f32; 3]]) -> Cow<'a, [[f32; 3]]> {
+        match &self.vertex_ranges[..] {
+            [range] => Cow::Borrowed(points.get(range.clone()).unwrap_or(&[])),
+            ranges => Cow::Owned(
+                ranges
+                    .iter()
+                    .flat_map(|r| points.get(r.clone()).unwrap_or(&[]).iter().copied())
+                    .collect(),
+            ),
+        }
+    }
+
+    /// The extent of this prim's part of a pose.
+    pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
+        extent_of(points, self.extent_padding)
+    }
+}
+
 /// Everything both writers put in the file apart from the time samples.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct CurvesScene {
     pub meters_per_unit: f64,
     pub up_axis: &'static str,
     pub timing: Option<Timing>,
-    /// Sorted by name; includes `points` and `extent` of the rest pose.
-    pub properties: Vec<Property>,
+    /// One `Strands` prim, or `guides` and `render` when the groom holds
+    /// both (per-strand `groom_guide`).
+    pub prims: Vec<CurvesPrim>,
     /// Vertex count of the groom (every frame must have as many points).
     pub vertex_count: usize,
-    /// Half the largest width: the extent grows by it, as USD's own
-    /// `UsdGeomCurves::ComputeExtent` does.
-    pub extent_padding: f32,
 }
 
 impl CurvesScene {
     pub fn new(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesScene, ExportError> {
-        let invalid = |message: String| ExportError::Invalid {
-            file: path.to_path_buf(),
-            message,
-        };
-        let (curve_type, basis) = match groom.basis {
-            CurveBasis::Linear => ("linear", None),
-            CurveBasis::Bezier => ("cubic", Some("bezier")),
-            CurveBasis::Bspline => ("cubic", Some("bspline")),
-            CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
-            other => {
-                return Err(ExportError::Unsupported {
-                    file: path.to_path_buf(),
-                    message: format!("USD BasisCurves have no {} basis", other.name()),
-                })
-            }
-        };
-        let counts = groom
-            .strand_vertex_counts
-            .iter()
-            .map(|&c| i32::try_from(c).map_err(|_| invalid(format!("strand of {c} points"))))
-            .collect::<Result<Vec<i32>, ExportError>>()?;
-
-        let mut properties = vec![
-            token_property("type", curve_type),
-            token_property("wrap", wrap_of(groom)),
-            Property {
-                name: "curveVertexCounts".into(),
-                type_name: "int[]",
-                uniform: false,
-                interpolation: None,
-                value: PropertyValue::Ints(counts),
-            },
-            Property {
-                name: "points".into(),
-                type_name: "point3f[]",
-                uniform: false,
-                interpolation: None,
-                value: PropertyValue::Float3s(groom.points.clone()),
-            },
-        ];
-        if let Some(basis) = basis {
-            properties.push(token_property("basis", basis));
-        }
-        let mut max_width = 0.0f32;
-        for attribute in &groom.attributes {
-            let interpolation = match attribute.scope {
-                Scope::Vertex => "vertex",
-                Scope::Strand => "uniform",
-            };
-            let (name, type_name, value) = match (&attribute.name[..], &attribute.values) {
-                ("width", AttributeValues::Float(v)) => {
-                    max_width = v.iter().fold(max_width, |m, &w| m.max(w.abs()));
-                    (
-                        "widths".to_string(),
-                        "float[]",
-                        PropertyValue::Floats(v.clone()),
-                    )
-                }
-                ("root_uv", AttributeValues::Vec2(v)) => (
-                    "primvars:st".to_string(),
-                    "texCoord2f[]",
-                    PropertyValue::Float2s(v.clone()),
-                ),
-                (attribute_name, values) => {
-                    let name = format!("primvars:{}", identifier(attribute_name));
-                    let type_name = declared_type(groom, attribute_name, values);
-                    match values {
-                        AttributeValues::Float(v) => {
-                            (name, type_name, PropertyValue::Floats(v.clone()))
-                        }
-                        AttributeValues::Vec2(v) => {
-                            (name, type_name, PropertyValue::Float2s(v.clone()))
-                        }
-                        AttributeValues::Vec3(v) => {
-                            (name, type_name, PropertyValue::Float3s(v.clone()))
-                        }
-                        AttributeValues::Int(v) => {
-                            (name, type_name, PropertyValue::Ints(v.clone()))
-                        }
+        let (groups, split_roles, mixed_curves) = prim_groups(groom);
+        let prims = if groups.len() <= 1 {
+            vec![curves_prim(
+                path,
+                groom,
+                CURVES_PRIM.to_string(),
+                std::iter::once(0..groom.points.len()).collect(),
+            )?]
+        } else {
+            let offsets = groom.strand_offsets();
+            let mut prims = Vec::with_capacity(groups.len());
+            for (key, strands) in groups {
+                let mut ranges: Vec<Range<usize>> = Vec::new();
+                for &s in &strands {
+                    let range = offsets[s]..offsets[s + 1];
+                    match ranges.last_mut() {
+                        Some(last) if last.end == range.start => last.end = range.end,
+                        _ => ranges.push(range),
                     }
                 }
-            };
-            let name = unique_name(&properties, name);
-            properties.push(Property {
-                name,
-                type_name,
-                uniform: false,
-                interpolation: Some(interpolation),
-                value,
-            });
-        }
-        let extent_padding = max_width * 0.5;
-        properties.push(Property {
-            name: "extent".into(),
-            type_name: "float3[]",
-            uniform: false,
-            interpolation: None,
-            value: PropertyValue::Float3s(extent_of(&groom.points, extent_padding).to_vec()),
-        });
-        properties.sort_by(|a, b| a.name.cmp(&b.name));
-
+                let mut part = groom.select_strands(&strands);
+                if mixed_curves {
+                    part.basis = key.basis().unwrap_or(groom.basis);
+                    part.remove_attribute("curve_basis");
+                    part.remove_attribute("curve_wrap");
+                    let wrap = key.wrap().unwrap_or("nonperiodic");
+                    part.provenance
+                        .metadata
+                        .insert("usd.wrap".into(), wrap.into());
+                }
+                let name = key.name(split_roles, mixed_curves);
+                prims.push(curves_prim(path, &part, name, ranges)?);
+            }
+            prims
+        };
         Ok(CurvesScene {
             meters_per_unit: groom.units.meters_per_unit,
             up_axis: groom.up_axis.name(),
             timing: fps.map(|fps| Timing { fps }),
-            properties,
+            prims,
             vertex_count: groom.points.len(),
-            extent_padding,
         })
     }
 
@@ -340,7 +309,7 @@ impl CurvesScene {
     /// names, types and tokens: an animated export then holds no copy of
     /// the groom's arrays while frames stream.
     pub fn forget_values(&mut self) {
-        for property in &mut self.properties {
+        for property in self.prims.iter_mut().flat_map(|p| &mut p.properties) {
             match &mut property.value {
                 PropertyValue::Token(_) => {}
                 PropertyValue::Ints(v) => *v = Vec::new(),
@@ -349,11 +318,6 @@ impl CurvesScene {
                 PropertyValue::Float3s(v) => *v = Vec::new(),
             }
         }
-    }
-
-    /// The extent of one pose.
-    pub fn extent(&self, points: &[[f32; 3]]) -> [[f32; 3]; 2] {
-        extent_of(points, self.extent_padding)
     }
 
     /// Checks a streamed frame against the groom's topology.
@@ -377,6 +341,120 @@ impl CurvesScene {
         }
         Ok(())
     }
+}
+
+/// The properties of one curves prim holding `groom` (all of a groom, or
+/// its guides or render strands).
+fn curves_prim(
+    path: &Path,
+    groom: &Groom,
+    name: String,
+    vertex_ranges: Vec<Range<usize>>,
+) -> Result<CurvesPrim, ExportError> {
+    let invalid = |message: String| ExportError::Invalid {
+        file: path.to_path_buf(),
+        message,
+    };
+    let (curve_type, basis) = match groom.basis {
+        CurveBasis::Linear => ("linear", None),
+        CurveBasis::Bezier => ("cubic", Some("bezier")),
+        CurveBasis::Bspline => ("cubic", Some("bspline")),
+        CurveBasis::CatmullRom => ("cubic", Some("catmullRom")),
+        other => {
+            return Err(ExportError::Unsupported {
+                file: path.to_path_buf(),
+                message: format!("USD BasisCurves have no {} basis", other.name()),
+            })
+        }
+    };
+    let counts = groom
+        .strand_vertex_counts
+        .iter()
+        .map(|&c| i32::try_from(c).map_err(|_| invalid(format!("strand of {c} points"))))
+        .collect::<Result<Vec<i32>, ExportError>>()?;
+
+    let mut properties = vec![
+        token_property("type", curve_type),
+        token_property("wrap", wrap_of(groom)),
+        Property {
+            name: "curveVertexCounts".into(),
+            type_name: "int[]",
+            uniform: false,
+            interpolation: None,
+            value: PropertyValue::Ints(counts),
+        },
+        Property {
+            name: "points".into(),
+            type_name: "point3f[]",
+            uniform: false,
+            interpolation: None,
+            value: PropertyValue::Float3s(groom.points.clone()),
+        },
+    ];
+    if let Some(basis) = basis {
+        properties.push(token_property("basis", basis));
+    }
+    let mut max_width = 0.0f32;
+    for attribute in &groom.attributes {
+        let interpolation = match attribute.scope {
+            Scope::Vertex => "vertex",
+            Scope::Strand => "uniform",
+        };
+        let (name, type_name, value) = match (&attribute.name[..], &attribute.values) {
+            ("width", AttributeValues::Float(v)) => {
+                max_width = v.iter().fold(max_width, |m, &w| m.max(w.abs()));
+                (
+                    "widths".to_string(),
+                    "float[]",
+                    PropertyValue::Floats(v.clone()),
+                )
+            }
+            ("root_uv", AttributeValues::Vec2(v)) => (
+                "primvars:st".to_string(),
+                "texCoord2f[]",
+                PropertyValue::Float2s(v.clone()),
+            ),
+            (attribute_name, values) => {
+                let name = format!("primvars:{}", identifier(attribute_name));
+                let type_name = declared_type(groom, attribute_name, values);
+                match values {
+                    AttributeValues::Float(v) => {
+                        (name, type_name, PropertyValue::Floats(v.clone()))
+                    }
+                    AttributeValues::Vec2(v) => {
+                        (name, type_name, PropertyValue::Float2s(v.clone()))
+                    }
+                    AttributeValues::Vec3(v) => {
+                        (name, type_name, PropertyValue::Float3s(v.clone()))
+                    }
+                    AttributeValues::Int(v) => (name, type_name, PropertyValue::Ints(v.clone())),
+                }
+            }
+        };
+        let name = unique_name(&properties, name);
+        properties.push(Property {
+            name,
+            type_name,
+            uniform: false,
+            interpolation: Some(interpolation),
+            value,
+        });
+    }
+    let extent_padding = max_width * 0.5;
+    properties.push(Property {
+        name: "extent".into(),
+        type_name: "float3[]",
+        uniform: false,
+        interpolation: None,
+        value: PropertyValue::Float3s(extent_of(&groom.points, extent_padding).to_vec()),
+    });
+    properties.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(CurvesPrim {
+        name,
+        properties,
+        vertex_ranges,
+        extent_padding,
+    })
 }
 
 /// The time code of a time in seconds. Codes within 1e-9 of a whole number

@@ -7,7 +7,7 @@
 //! extents. `finish` writes the header and copies the spill file after it.
 //! Memory stays at one frame plus one extent per frame.
 
-use super::{time_code, CurvesScene, Property, PropertyValue, CURVES_PRIM, ROOT_PRIM};
+use super::{time_code, CurvesPrim, CurvesScene, Property, PropertyValue, ROOT_PRIM};
 use crate::{ExportError, FrameWriter};
 use groom::{AtomicFile, Frame};
 use std::fmt::Write as _;
@@ -15,41 +15,34 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Writes the curves prims `scenes` (name and scene; the first gives the
-/// stage metadata) under the root.
-pub(super) fn write_static(
-    path: &Path,
-    scenes: &[(String, CurvesScene)],
-) -> Result<(), ExportError> {
+pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
     let io_error = |e| ExportError::io(path, e);
-    let Some((_, first)) = scenes.first() else {
-        return Err(ExportError::Invalid {
-            file: path.to_path_buf(),
-            message: "no curves to write".into(),
-        });
-    };
     let mut file = AtomicFile::create(path).map_err(io_error)?;
-    let mut text = stage_header(first, None);
-    for (index, (name, scene)) in scenes.iter().enumerate() {
-        if index > 0 {
-            text.push_str("    }\n\n");
+    let mut write = || -> io::Result<()> {
+        file.write_all(header(scene, None).as_bytes())?;
+        for prim in &scene.prims {
+            file.write_all(prim_opening(prim).as_bytes())?;
+            write_properties(&mut file, prim)?;
+            file.write_all(PRIM_CLOSING)?;
         }
-        text.push_str(&prim_opening(name));
-        file.write_all(text.as_bytes())
-            .and_then(|()| write_properties(&mut file, scene))
-            .map_err(io_error)?;
-        text.clear();
-    }
-    file.write_all(CLOSING).map_err(io_error)?;
+        file.write_all(ROOT_CLOSING)
+    };
+    write().map_err(io_error)?;
     file.commit().map_err(io_error)
 }
 
-/// Closes the curves prim and the root.
-const CLOSING: &[u8] = b"    }\n}\n";
+/// Closes a curves prim.
+const PRIM_CLOSING: &[u8] = b"    }\n";
+/// Closes the root.
+const ROOT_CLOSING: &[u8] = b"}\n";
 
-/// Stage metadata and the opening of the root; `range` is the first and
-/// last time code of an animated export.
-fn stage_header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
+fn prim_opening(prim: &CurvesPrim) -> String {
+    format!("    def BasisCurves \"{}\"\n    {{\n", prim.name)
+}
+
+/// Stage metadata and the opening of the root prim; `range`
+/// is the first and last time code of an animated export.
+fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let mut header = String::from("#usda 1.0\n(\n");
     let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
     header.push_str("    doc = \"Written by groombake\"\n");
@@ -68,19 +61,9 @@ fn stage_header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     header
 }
 
-fn prim_opening(name: &str) -> String {
-    format!("    def BasisCurves \"{name}\"\n    {{\n")
-}
-
-/// The stage header and the opening of the one curves prim of an animated
-/// export.
-fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
-    stage_header(scene, range) + &prim_opening(CURVES_PRIM)
-}
-
-fn write_properties(out: &mut dyn Write, scene: &CurvesScene) -> io::Result<()> {
+fn write_properties(out: &mut dyn Write, prim: &CurvesPrim) -> io::Result<()> {
     let mut text = String::new();
-    for property in &scene.properties {
+    for property in &prim.properties {
         text.clear();
         write_property(&mut text, property);
         out.write_all(text.as_bytes())?;
@@ -158,10 +141,10 @@ struct SpillFile {
 }
 
 impl SpillFile {
-    fn create(destination: &Path) -> io::Result<SpillFile> {
+    fn create(destination: &Path, prim: usize) -> io::Result<SpillFile> {
         let mut name = std::ffi::OsString::from(".");
         name.push(destination.file_name().unwrap_or_default());
-        name.push(format!(".{}.frames.tmp", std::process::id()));
+        name.push(format!(".{}.{prim}.frames.tmp", std::process::id()));
         let path = destination.with_file_name(name);
         let file = File::create(&path)?;
         Ok(SpillFile {
@@ -193,31 +176,42 @@ impl Drop for SpillFile {
     }
 }
 
-/// Streams the frames of an animated `.usda` export.
+/// Streams the frames of an animated `.usda` export: one spill file per
+/// curves prim, since each prim's samples must precede the next prim.
 pub(super) struct AnimatedUsda {
     path: PathBuf,
     scene: CurvesScene,
-    spill: SpillFile,
-    extents: Vec<(f64, [[f32; 3]; 2])>,
+    spills: Vec<SpillFile>,
+    codes: Vec<f64>,
+    /// Per prim, the extent of each frame.
+    extents: Vec<Vec<[[f32; 3]; 2]>>,
     line: String,
 }
 
 impl AnimatedUsda {
     pub fn create(path: &Path, mut scene: CurvesScene) -> Result<AnimatedUsda, ExportError> {
         let io_error = |e| ExportError::io(path, e);
-        let mut spill = SpillFile::create(path).map_err(io_error)?;
-        let writer = spill.writer().map_err(io_error)?;
-        write_properties(writer, &scene)
-            .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
-            .map_err(io_error)?;
-        // The static values are in the spill file now; only the metadata
+        let mut spills = Vec::with_capacity(scene.prims.len());
+        for (index, prim) in scene.prims.iter().enumerate() {
+            let mut spill = SpillFile::create(path, index).map_err(io_error)?;
+            let writer = spill.writer().map_err(io_error)?;
+            writer
+                .write_all(prim_opening(prim).as_bytes())
+                .and_then(|()| write_properties(writer, prim))
+                .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
+                .map_err(io_error)?;
+            spills.push(spill);
+        }
+        // The static values are in the spill files now; only the metadata
         // is needed until the end.
         scene.forget_values();
+        let extents = vec![Vec::new(); scene.prims.len()];
         Ok(AnimatedUsda {
             path: path.to_path_buf(),
             scene,
-            spill,
-            extents: Vec::new(),
+            spills,
+            codes: Vec::new(),
+            extents,
             line: String::new(),
         })
     }
@@ -228,53 +222,63 @@ impl FrameWriter for AnimatedUsda {
         self.scene.check_frame(&self.path, frame)?;
         let fps = self.scene.timing.map_or(1.0, |t| t.fps);
         let code = time_code(frame.time, fps);
-        if self.extents.last().is_some_and(|(last, _)| code <= *last) {
+        if self.codes.last().is_some_and(|last| code <= *last) {
             return Err(ExportError::Invalid {
                 file: self.path.clone(),
                 message: format!("frame time codes must increase (time code {code})"),
             });
         }
-        self.extents.push((code, self.scene.extent(&frame.points)));
-        self.line.clear();
-        let _ = write!(self.line, "            {}: ", Num(code));
-        write_float3s(&mut self.line, &frame.points);
-        self.line.push_str(",\n");
-        let line = std::mem::take(&mut self.line);
-        let result = self
-            .spill
-            .writer()
-            .and_then(|w| w.write_all(line.as_bytes()));
-        self.line = line;
-        result.map_err(|e| ExportError::io(&self.path, e))
+        self.codes.push(code);
+        for ((prim, spill), extents) in self
+            .scene
+            .prims
+            .iter()
+            .zip(&mut self.spills)
+            .zip(&mut self.extents)
+        {
+            let points = prim.points_of(&frame.points);
+            extents.push(prim.extent(&points));
+            self.line.clear();
+            let _ = write!(self.line, "            {}: ", Num(code));
+            write_float3s(&mut self.line, &points);
+            self.line.push_str(",\n");
+            spill
+                .writer()
+                .and_then(|w| w.write_all(self.line.as_bytes()))
+                .map_err(|e| ExportError::io(&self.path, e))?;
+        }
+        Ok(())
     }
 
     fn finish(self: Box<Self>) -> Result<(), ExportError> {
-        let mut this = *self;
+        let this = *self;
         let io_error = |e| ExportError::io(&this.path, e);
-        let (Some(&(start, _)), Some(&(end, _))) = (this.extents.first(), this.extents.last())
-        else {
+        let (Some(&start), Some(&end)) = (this.codes.first(), this.codes.last()) else {
             return Err(ExportError::Invalid {
                 file: this.path.clone(),
                 message: "an animated export needs at least one frame".into(),
             });
         };
-        let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
-        for (code, extent) in &this.extents {
-            let _ = write!(tail, "            {}: ", Num(*code));
-            write_float3s(&mut tail, extent);
-            tail.push_str(",\n");
-        }
-        tail.push_str("        }\n");
-        let spill_writer = this.spill.writer().map_err(io_error)?;
-        spill_writer
-            .write_all(tail.as_bytes())
-            .and_then(|()| spill_writer.write_all(CLOSING))
-            .map_err(io_error)?;
-        let (mut body, _spill) = this.spill.into_reader().map_err(io_error)?;
         let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
         file.write_all(header(&this.scene, Some((start, end))).as_bytes())
-            .and_then(|()| io::copy(&mut body, &mut file).map(|_| ()))
             .map_err(io_error)?;
+        for (mut spill, extents) in this.spills.into_iter().zip(&this.extents) {
+            let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
+            for (code, extent) in this.codes.iter().zip(extents) {
+                let _ = write!(tail, "            {}: ", Num(*code));
+                write_float3s(&mut tail, extent);
+                tail.push_str(",\n");
+            }
+            tail.push_str("        }\n");
+            let spill_writer = spill.writer().map_err(io_error)?;
+            spill_writer
+                .write_all(tail.as_bytes())
+                .and_then(|()| spill_writer.write_all(PRIM_CLOSING))
+                .map_err(io_error)?;
+            let (mut body, _spill) = spill.into_reader().map_err(io_error)?;
+            io::copy(&mut body, &mut file).map_err(io_error)?;
+        }
+        file.write_all(ROOT_CLOSING).map_err(io_error)?;
         file.commit().map_err(io_error)
     }
 }

@@ -991,7 +991,18 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             }
         }
     }
-    if several {
+    // Two prims that are the guides and the render strands (as groombake
+    // writes them: `groom_guide` 1 in the first, 0 in the second) are one
+    // groom's split, told by `groom_guide`, not two groups.
+    let guides_then_render = several
+        && group_ids.iter().all(|&g| g <= 1)
+        && groom.guide_flags().is_some_and(|flags| {
+            flags
+                .iter()
+                .zip(&group_ids)
+                .all(|(&guide, &group)| guide == (group == 0))
+        });
+    if several && !guides_then_render {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
             AttributeValues::Int(group_ids),
