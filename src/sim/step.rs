@@ -403,6 +403,7 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         let joint = &s.joints[j];
         work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
+        let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
         let mut db = [0.0f32; 4];
         for k in 0..4 {
@@ -419,7 +420,7 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             effective[k] = b.min(target);
         }
         work.db[j] = db;
-        work.rest[j] = rest_darboux(omega, &effective, &joint.memories, &ctx.influences);
+        work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
     }
 }
 
@@ -642,9 +643,10 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
         let joint = &mut s.joints[j];
         if db.iter().any(|d| *d > 0.0) {
             let omega = math::darboux(work.q[j - 1], work.q[j]);
+            let omega_w = math::darboux_real(work.q[j - 1], work.q[j]);
             for ((memory, rate), d) in joint.memories.iter_mut().zip(&joint.rates).zip(&db) {
                 if *d > 0.0 {
-                    *memory = reform(*memory, *rate, *d, omega);
+                    *memory = reform(*memory, *rate, *d, omega, omega_w);
                 }
             }
         }

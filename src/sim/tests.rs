@@ -299,6 +299,42 @@ fn perm_keeps_two_thirds_of_the_rod_curvature_and_a_wash_keeps_its_other_bonds()
     );
 }
 
+/// The double-cover bug of issue 10: with the sign `s` taken on the
+/// imaginary part of the Darboux quaternion only, gravity pulling a set
+/// joint past straight flipped `s` and the rest bend became the mirror of
+/// the set. Every joint's rest Darboux vector must keep the held direction.
+#[test]
+fn a_set_strand_released_under_gravity_keeps_the_direction_of_every_set_joint() {
+    let material = Material {
+        bond_influences: [0.33, 0.34, 0.17, 0.16],
+        ..Material::default()
+    };
+    let SetResult { mut set, .. } = bed_hair(material);
+    let held = set.rest_darboux();
+    hold(&mut set, None);
+    let mut solver = Solver::new(settling()).unwrap();
+    let gravity = Environment::default();
+    let mut flipped_joints = 0;
+    let mut crossed_straight = 0;
+    for _ in 0..6 {
+        run(&mut solver, &mut set, &gravity, 0.5);
+        let rest = set.rest_darboux();
+        let q = set.edge_rotations();
+        for j in 1..set.vertex_count() - 1 {
+            if math::dot(rest[j], held[j]) <= 0.0 {
+                flipped_joints += 1;
+            }
+            if math::dot(math::darboux(q[j - 1], q[j]), held[j]) < 0.0 {
+                crossed_straight += 1;
+            }
+        }
+    }
+    eprintln!("joints pulled past straight: {crossed_straight}, flipped: {flipped_joints}");
+    // The scene must test the bug: gravity bends joints past straight.
+    assert!(crossed_straight > 0);
+    assert_eq!(flipped_joints, 0);
+}
+
 #[test]
 fn a_wash_erases_bed_hair() {
     let material = Material {
