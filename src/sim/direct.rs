@@ -21,6 +21,9 @@
 
 use super::math::{Quat, V3};
 
+/// The largest frame rotation one iteration applies, radians.
+const MAX_TURN: f64 = 0.5;
+
 type M6 = [[f64; 6]; 6];
 type V6 = [f64; 6];
 type M3 = [[f64; 3]; 3];
@@ -244,7 +247,11 @@ impl Direct {
             self.upper[k] = u;
         }
         self.solve_tridiagonal();
-        self.apply(input);
+        // A solve that went non-finite (only from non-finite input) leaves
+        // the state as it is; the quarantine judges the strand.
+        if self.rhs.iter().flatten().all(|v| v.is_finite()) {
+            self.apply(input);
+        }
         residual
     }
 
@@ -352,7 +359,14 @@ impl Direct {
                 let db: D3 = [self.rhs[e + 1][0], self.rhs[e + 1][1], self.rhs[e + 1][2]];
                 t = sub3(t, mul_at_v(&self.g[e + 1], db));
             }
-            let dtheta = mul_av(&inverse_inertia(input, e, self.d3[e]), t);
+            let mut dtheta = mul_av(&inverse_inertia(input, e, self.d3[e]), t);
+            // The linearisation holds for small turns: a frame that must
+            // turn far in one step (a kinematic target jumping) gets there
+            // over several iterations and steps instead of overshooting.
+            let turn = dot3(dtheta, dtheta).sqrt();
+            if turn > MAX_TURN {
+                dtheta = scale3(dtheta, MAX_TURN / turn);
+            }
             let q = self.q[e];
             // q += 1/2 (dtheta, 0) q, renormalised.
             let s = qmul_d([dtheta[0], dtheta[1], dtheta[2], 0.0], q);
