@@ -1,7 +1,7 @@
 //! The rod constraints of 000 §4.1 (PBD Cosserat rods): stretch/shear
 //! (1)-(5), bend/twist (6)-(11), and the root-to-tip inextensibility pass.
 
-use super::math::{darboux, qnormalize, tangent, Quat, V3};
+use super::math::{darboux, darboux_real, double_cover_sign, qnormalize, tangent, Quat, V3};
 
 /// Squared size of a stretch/shear violation too small to correct.
 pub(crate) const STRETCH_DEADBAND2: f32 = 4.0e-12;
@@ -101,15 +101,14 @@ pub fn bend_coefficients(w1: f32, w2: f32, k_prime: f32) -> [f32; 2] {
 #[inline(always)]
 pub fn bend_twist(q1: &mut Quat, q2: &mut Quat, rest: V3, ab: [f32; 2]) {
     let omega = darboux(*q1, *q2);
-    let minus = [omega[0] - rest[0], omega[1] - rest[1], omega[2] - rest[2]];
-    let plus = [omega[0] + rest[0], omega[1] + rest[1], omega[2] + rest[2]];
-    let minus2 = minus[0] * minus[0] + minus[1] * minus[1] + minus[2] * minus[2];
-    let plus2 = plus[0] * plus[0] + plus[1] * plus[1] + plus[2] * plus[2];
-    let (delta, delta2) = if minus2 <= plus2 {
-        (minus, minus2)
-    } else {
-        (plus, plus2)
-    };
+    // s of (9)-(11) on the full Darboux quaternion (METHOD A).
+    let s = double_cover_sign(omega, darboux_real(*q1, *q2), rest);
+    let delta = [
+        omega[0] - s * rest[0],
+        omega[1] - s * rest[1],
+        omega[2] - s * rest[2],
+    ];
+    let delta2 = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
     if delta2 < BEND_DEADBAND2 {
         return;
     }

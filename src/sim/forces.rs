@@ -23,9 +23,17 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
     let rel = sub(position, blower.from);
     let along = dot(rel, w_hat);
     let d = length(sub(rel, scale(w_hat, along)));
+    // Nothing blows behind the nozzle, nor outside its cone.
+    let outside_cone = blower
+        .cone_half_angle
+        .is_some_and(|a| d > along * a.to_radians().tan());
+    if along <= 0.0 || outside_cone {
+        return [0.0; 3];
+    }
+    let falloff = d / blower.falloff_length + 1.0;
     scale(
         w_hat,
-        blower.strength * sin_theta / ((d + 1.0) * (d + 1.0)) * dt,
+        blower.strength * sin_theta / (falloff * falloff) * dt,
     )
 }
 
@@ -506,6 +514,8 @@ mod tests {
     #[test]
     fn blower_pushes_along_the_wind_and_ignores_parallel_hair() {
         let blower = Blower {
+            falloff_length: 1.0,
+            cone_half_angle: None,
             from: [0.0, 0.0, -1.0],
             to: [0.0, 0.0, 0.0],
             strength: 2.0,

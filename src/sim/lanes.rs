@@ -33,10 +33,6 @@ impl F4 {
         std::array::from_fn(|i| self.0[i] < other.0[i])
     }
     #[inline(always)]
-    fn le(self, other: F4) -> [bool; LANES] {
-        std::array::from_fn(|i| self.0[i] <= other.0[i])
-    }
-    #[inline(always)]
     fn gt(self, other: F4) -> [bool; LANES] {
         std::array::from_fn(|i| self.0[i] > other.0[i])
     }
@@ -207,13 +203,19 @@ fn bend_twist(q1: &mut Q4, q2: &mut Q4, rest: P4, a: F4, b: F4) {
         p[3] * r[1] + p[0] * r[2] - p[1] * r[3] - p[2] * r[0],
         p[3] * r[2] - p[0] * r[1] + p[1] * r[0] - p[2] * r[3],
     ];
-    let minus = [omega[0] - rest[0], omega[1] - rest[1], omega[2] - rest[2]];
-    let plus = [omega[0] + rest[0], omega[1] + rest[1], omega[2] + rest[2]];
-    let minus2 = minus[0] * minus[0] + minus[1] * minus[1] + minus[2] * minus[2];
-    let plus2 = plus[0] * plus[0] + plus[1] * plus[1] + plus[2] * plus[2];
-    let use_minus = minus2.le(plus2);
-    let delta = select3(use_minus, minus, plus);
-    let delta2 = F4::select(use_minus, minus2, plus2);
+    // `double_cover_sign` of math.rs, per lane: the 4D dot product of the
+    // Darboux quaternion (omega, q1 . q2) and (rest, rest_real(rest)).
+    let w = p[0] * r[0] + p[1] * r[1] + p[2] * r[2] + p[3] * r[3];
+    let rest2 = rest[0] * rest[0] + rest[1] * rest[1] + rest[2] * rest[2];
+    let rest_w = F4((F4::splat(1.0) - rest2).0.map(|x| x.max(0.0))).sqrt();
+    let dot4 = omega[0] * rest[0] + omega[1] * rest[1] + omega[2] * rest[2] + w * rest_w;
+    let s = F4::select(dot4.lt(F4::splat(0.0)), F4::splat(-1.0), F4::splat(1.0));
+    let delta = [
+        omega[0] - s * rest[0],
+        omega[1] - s * rest[1],
+        omega[2] - s * rest[2],
+    ];
+    let delta2 = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
     let apply = not(delta2.lt(F4::splat(BEND_DEADBAND2)));
     let r1 = qmul_pure(r, delta);
     let r2 = qmul_pure(p, delta);

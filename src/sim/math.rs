@@ -90,6 +90,47 @@ pub fn darboux(q1: Quat, q2: Quat) -> V3 {
     ]
 }
 
+/// The real part of the Darboux quaternion `conj(q1) q2` (its imaginary
+/// part is [`darboux`]): `q1 . q2` in 4D.
+#[inline(always)]
+pub fn darboux_real(q1: Quat, q2: Quat) -> f32 {
+    qdot(q1, q2)
+}
+
+/// The real part of the unit quaternion whose imaginary part is the rest
+/// Darboux vector `omega` (taken non-negative: a rest bend below half a turn).
+#[inline(always)]
+pub fn rest_real(omega: V3) -> f32 {
+    (1.0 - dot(omega, omega)).max(0.0).sqrt()
+}
+
+/// `s` of (9)-(18), the quaternion double cover (METHOD A): +1 when the
+/// full Darboux quaternion `(omega, w)` is nearer `(rest, rest_real(rest))`
+/// than its negative, i.e. when their 4D dot product is not negative. On
+/// the imaginary parts alone the test would flip whenever a joint is bent
+/// past straight, mirroring the rest bend.
+#[inline(always)]
+pub fn double_cover_sign(omega: V3, w: f32, rest: V3) -> f32 {
+    if dot(omega, rest) + w * rest_real(rest) < 0.0 {
+        -1.0
+    } else {
+        1.0
+    }
+}
+
+/// The representative of the Darboux quaternion `(omega, w)` with a
+/// non-negative real part: frames may flip sign (`q` and `-q` are one
+/// rotation), but remembered and rest Darboux vectors are stored with an
+/// implied non-negative real part, so what is mixed into them must be too.
+#[inline(always)]
+pub fn canonical_darboux(omega: V3, w: f32) -> (V3, f32) {
+    if w < 0.0 {
+        (scale(omega, -1.0), -w)
+    } else {
+        (omega, w)
+    }
+}
+
 /// `R(q) e3`: the frame's tangent.
 #[inline(always)]
 pub fn tangent(q: Quat) -> V3 {

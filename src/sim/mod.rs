@@ -42,9 +42,12 @@
 mod bonds;
 mod colliders;
 mod constraints;
+mod direct;
 mod forces;
 mod lanes;
 mod math;
+#[cfg(test)]
+mod physical_tests;
 mod quarantine;
 mod rest_pose;
 mod state;
@@ -98,12 +101,41 @@ impl BondKind {
     }
 }
 
-/// The hair material (000 Table 1).
+/// Which elastic model the rods use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Model {
+    /// Real units (METHOD H): masses from density, compliant (XPBD)
+    /// stretch/shear and bend/twist from Young's and shear moduli, solved
+    /// per strand by a direct block-tridiagonal solve. The result converges
+    /// as edges shrink and `dt` falls.
+    #[default]
+    Physical,
+    /// The paper's PBD model (000 §4): unit vertex masses, stiffness as the
+    /// fraction `k_o`, Gauss-Seidel iterations and Follow-The-Leader. Kept to
+    /// reproduce Table 1; the result depends on edge length and `dt`.
+    Paper,
+}
+
+/// The hair material (000 Table 1 and METHOD H).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Material {
-    /// `k_o`, the bend/twist stiffness of healthy hair, in [0, 1].
+    pub model: Model,
+    /// `k_o`, the bend/twist stiffness of healthy hair, in [0, 1] (paper
+    /// model only).
     pub stiffness: f32,
+    /// Young's modulus `E`, Pa (physical model).
+    pub youngs_modulus: f32,
+    /// Shear modulus `G`, Pa; `None`: `E / (2 (1 + poisson_ratio))`.
+    pub shear_modulus: Option<f32>,
+    /// Poisson ratio, for `G` when `shear_modulus` is not given.
+    pub poisson_ratio: f32,
+    /// Density, kg/m^3.
+    pub density: f32,
+    /// Fibre radius, metres; `None`: half the groom's `width` attribute
+    /// where it has one, else 40 um.
+    pub radius: Option<f32>,
     /// The cuticle peel rate `s` of (14), per metre of arc length from the
     /// root (0.33 %/cm = 0.33 /m).
     pub cuticle_peel_per_meter: f32,
@@ -113,10 +145,19 @@ pub struct Material {
     pub bond_influences: [f32; 4],
 }
 
+/// The fibre radius when neither the material nor the groom gives one.
+pub const DEFAULT_RADIUS: f32 = 4.0e-5;
+
 impl Default for Material {
     fn default() -> Self {
         Material {
+            model: Model::Physical,
             stiffness: 0.05,
+            youngs_modulus: 3.5e9,
+            shear_modulus: None,
+            poisson_ratio: 0.3,
+            density: 1300.0,
+            radius: None,
             cuticle_peel_per_meter: 0.33,
             // Table 1, scene 3, with the paper's 63% of hydrogen + ionic split
             // 0.35 / 0.28 (ours to choose, METHOD E/G).
@@ -139,6 +180,25 @@ impl Material {
         if !(self.stiffness.is_finite() && (0.0..=1.0).contains(&self.stiffness)) {
             return fail("stiffness", "must be in [0, 1]");
         }
+        if !(self.youngs_modulus.is_finite() && self.youngs_modulus > 0.0) {
+            return fail("youngs_modulus", "must be a positive pressure in Pa");
+        }
+        if let Some(g) = self.shear_modulus {
+            if !(g.is_finite() && g > 0.0) {
+                return fail("shear_modulus", "must be a positive pressure in Pa");
+            }
+        }
+        if !(self.poisson_ratio.is_finite() && (-0.99..=0.5).contains(&self.poisson_ratio)) {
+            return fail("poisson_ratio", "must be in [-0.99, 0.5]");
+        }
+        if !(self.density.is_finite() && self.density > 0.0) {
+            return fail("density", "must be a positive density in kg/m^3");
+        }
+        if let Some(r) = self.radius {
+            if !(r.is_finite() && r > 0.0 && r < 0.01) {
+                return fail("radius", "must be a length in (0, 0.01) metres");
+            }
+        }
         if !(self.cuticle_peel_per_meter.is_finite() && self.cuticle_peel_per_meter >= 0.0) {
             return fail("cuticle_peel_per_meter", "must be a non-negative number");
         }
@@ -160,6 +220,20 @@ impl Material {
         let sd = self.cuticle_peel_per_meter * arc_length;
         let c = if sd < 1.0 { 1.0 - sd } else { 0.0 };
         self.stiffness - CUTICLE_SHARE * self.stiffness * (1.0 - c)
+    }
+
+    /// The share of the healthy modulus left at arc length `d` from the
+    /// root, (13)-(14): the cuticle gradient of the physical model.
+    pub fn cuticle_factor(&self, arc_length: f32) -> f32 {
+        let sd = self.cuticle_peel_per_meter * arc_length;
+        let c = if sd < 1.0 { 1.0 - sd } else { 0.0 };
+        1.0 - CUTICLE_SHARE * (1.0 - c)
+    }
+
+    /// `G`, Pa.
+    pub fn shear_modulus(&self) -> f32 {
+        self.shear_modulus
+            .unwrap_or(self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio)))
     }
 
     /// The influences divided by their sum.
@@ -302,6 +376,14 @@ pub struct Blower {
     /// The factor of (21): `db_hyd = hydrogen_rate * |dv_w|` per step while
     /// `b_hyd < 1` (0.003 in the paper's scene 2).
     pub hydrogen_rate: f32,
+    /// The length scale `L` of the falloff, metres: strength falls with the
+    /// distance `d` from the wind's axis as `1 / (d / L + 1)^2` (the paper's
+    /// `d` has no unit; `L = 1` m is its formula read in metres).
+    pub falloff_length: f32,
+    /// Half-angle of the blower's cone, degrees: no wind outside it (`None`:
+    /// the whole half-space in front of the nozzle). Nothing blows behind the
+    /// nozzle in any case.
+    pub cone_half_angle: Option<f32>,
 }
 
 /// What the world does to the hair during one step; the timeline fills it.

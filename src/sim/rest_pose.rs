@@ -22,9 +22,11 @@ impl StrandSet {
                 .take(end.saturating_sub(1))
                 .skip(first + 1)
             {
-                let omega = math::darboux(self.edges[j - 1].rotation, self.edges[j].rotation);
+                let (q1, q2) = (self.edges[j - 1].rotation, self.edges[j].rotation);
+                let omega = math::darboux(q1, q2);
+                let w = math::darboux_real(q1, q2);
                 let joint = &self.joints[j];
-                *slot = rest_darboux(omega, &joint.rates, &joint.memories, &self.influences);
+                *slot = rest_darboux(omega, w, &joint.rates, &joint.memories, &self.influences);
             }
         }
         out

@@ -1,7 +1,7 @@
 //! `StrandSet`: the whole simulation state, in flat per-vertex arrays.
 
 use super::math::{self, Quat, IDENTITY, V3};
-use super::{BondKind, Material, Pose, SimError};
+use super::{BondKind, Material, Pose, SimError, DEFAULT_RADIUS};
 use groom::{Attribute, AttributeValues, Groom, Scope, UpAxis};
 
 /// The frame of one edge.
@@ -19,6 +19,9 @@ pub(crate) struct JointState {
     pub stiffness: f32,
     /// `k'` of (12) for `StrandSet::prime_iterations`.
     pub stiffness_prime: f32,
+    /// The share of the healthy modulus left by the cuticle gradient
+    /// (13)-(14) at this joint (physical model).
+    pub cuticle: f32,
     /// `b_j` per bond kind.
     pub rates: [f32; 4],
     /// `Omega_j` per bond kind.
@@ -87,6 +90,9 @@ pub struct StrandSet {
     pub(crate) joints: Vec<JointState>,
     pub(crate) controls: Vec<VertexControl>,
     pub(crate) wetness: Vec<f32>,
+    /// Fibre radius per vertex, metres (physical model: masses and
+    /// stiffness).
+    pub(crate) radii: Vec<f32>,
     /// The iteration count `stiffness_prime` was computed for (0: none).
     pub(crate) prime_iterations: u32,
 }
@@ -115,6 +121,43 @@ pub mod attribute_names {
     pub const ROOT_FRAME_XYZ: &str = "sim_root_frame_xyz";
     pub const ROOT_FRAME_W: &str = "sim_root_frame_w";
     pub const FROZEN: &str = "sim_frozen";
+}
+
+/// The fibre radius of every vertex: the material's, else half the groom's
+/// `width` (per vertex or per strand) where it is positive and finite, else
+/// `DEFAULT_RADIUS`.
+fn fibre_radii(groom: &Groom, material: &Material) -> Vec<f32> {
+    let n = groom.points.len();
+    if let Some(r) = material.radius {
+        return vec![r; n];
+    }
+    let mut radii = vec![DEFAULT_RADIUS; n];
+    let widths = ["width", "widths", "groom_width"].iter().find_map(|name| {
+        match groom.attribute(name).map(|a| &a.values) {
+            Some(AttributeValues::Float(v)) => Some(v),
+            _ => None,
+        }
+    });
+    let usable = |w: f32| w.is_finite() && w > 0.0 && w < 0.02;
+    if let Some(widths) = widths {
+        if widths.len() == n {
+            for (r, w) in radii.iter_mut().zip(widths) {
+                if usable(*w) {
+                    *r = 0.5 * w;
+                }
+            }
+        } else if widths.len() == groom.strand_vertex_counts.len() {
+            let mut start = 0usize;
+            for (count, w) in groom.strand_vertex_counts.iter().zip(widths) {
+                let end = (start + *count as usize).min(n);
+                if usable(*w) {
+                    radii[start..end].fill(0.5 * w);
+                }
+                start = end;
+            }
+        }
+    }
+    radii
 }
 
 impl StrandSet {
@@ -169,6 +212,7 @@ impl StrandSet {
                 JointState {
                     stiffness: material.stiffness,
                     stiffness_prime: 0.0,
+                    cuticle: 1.0,
                     rates: [1.0; 4],
                     memories: [[0.0; 3]; 4],
                 };
@@ -182,6 +226,7 @@ impl StrandSet {
                 vertex_count
             ],
             wetness: vec![0.0; vertex_count],
+            radii: fibre_radii(groom, material),
             prime_iterations: 0,
         };
         for strand in 0..strand_count {
@@ -257,6 +302,7 @@ impl StrandSet {
             );
             let joint = &mut self.joints[first + j];
             joint.stiffness = self.material.stiffness_at(arc);
+            joint.cuticle = self.material.cuticle_factor(arc);
             joint.memories = [omega; 4];
             joint.rates = [1.0; 4];
         }
@@ -603,6 +649,7 @@ impl StrandSet {
                 for j in first + 1..end.saturating_sub(1) {
                     arc += set.edges[j - 1].rest_length;
                     set.joints[j].stiffness = set.material.stiffness_at(arc);
+                    set.joints[j].cuticle = set.material.cuticle_factor(arc);
                 }
             }
         }

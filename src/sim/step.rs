@@ -10,13 +10,14 @@ use super::colliders::{project, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
+use super::direct::{Direct, DirectInput, EdgeCompliance};
 use super::forces::{blower_dv, EdgeGrid};
 use super::lanes::{Group, LaneInput, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
 use super::{
-    Blower, ColliderSet, Environment, Gravity, Inextensibility, SimError, SolverParameters,
+    Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, SimError, SolverParameters,
     StepReport, StrandSet,
 };
 use rayon::prelude::*;
@@ -42,6 +43,7 @@ struct StrandMut<'a> {
     edges: &'a mut [EdgeState],
     joints: &'a mut [JointState],
     controls: &'a [VertexControl],
+    radii: &'a [f32],
 }
 
 /// What every strand's step reads.
@@ -64,6 +66,15 @@ struct Context<'a> {
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
     simd: bool,
+    physical: Option<Physical>,
+}
+
+/// The physical model's material constants of a step.
+#[derive(Clone, Copy)]
+struct Physical {
+    youngs_modulus: f64,
+    shear_modulus: f64,
+    density: f64,
 }
 
 /// Per-thread working copy of one strand.
@@ -75,6 +86,7 @@ struct Work {
     q_old: Vec<Quat>,
     q: Vec<Quat>,
     w_q: Vec<f32>,
+    w_twist: Vec<f32>,
     l: Vec<f32>,
     rest: Vec<V3>,
     stretch: Vec<StretchCoefficients>,
@@ -83,6 +95,10 @@ struct Work {
     corrections: Vec<V3>,
     v: Vec<V3>,
     omega: Vec<V3>,
+    compliance: Vec<EdgeCompliance>,
+    direct: Direct,
+    /// The scalp's frame for the first edge this step.
+    root_frame: Quat,
 }
 
 impl Work {
@@ -97,7 +113,7 @@ impl Work {
         ] {
             v.resize(n, [0.0; 3]);
         }
-        for v in [&mut self.w, &mut self.w_q, &mut self.l] {
+        for v in [&mut self.w, &mut self.w_q, &mut self.w_twist, &mut self.l] {
             v.resize(n, 0.0);
         }
         self.stretch.resize(n, StretchCoefficients::default());
@@ -105,6 +121,7 @@ impl Work {
         self.q_old.resize(n, math::IDENTITY);
         self.q.resize(n, math::IDENTITY);
         self.db.resize(n, [0.0; 4]);
+        self.compliance.resize(n, EdgeCompliance::default());
     }
 }
 
@@ -168,7 +185,10 @@ impl Solver {
             let finite = math::is_finite3(b.from)
                 && math::is_finite3(b.to)
                 && b.strength.is_finite()
-                && b.hydrogen_rate.is_finite();
+                && b.hydrogen_rate.is_finite()
+                && b.falloff_length.is_finite()
+                && b.falloff_length > 0.0
+                && b.cone_half_angle.is_none_or(f32::is_finite);
             if !finite {
                 return Err(SimError::Environment(
                     "the blower has a non-finite value".into(),
@@ -237,6 +257,14 @@ impl Solver {
             colliders: &prepared,
             root_transform: strands.root_transform,
             simd: self.simd,
+            physical: match strands.material.model {
+                Model::Paper => None,
+                Model::Physical => Some(Physical {
+                    youngs_modulus: strands.material.youngs_modulus as f64,
+                    shear_modulus: strands.material.shear_modulus() as f64,
+                    density: strands.material.density as f64,
+                }),
+            },
         };
         let mut views = split_strands(strands, &active);
         // Strands of one vertex count next to each other so groups of four
@@ -278,6 +306,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         edges,
         joints,
         controls,
+        radii,
         ..
     } = strands;
     let mut positions = positions.as_mut_slice();
@@ -285,6 +314,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
     let mut edges = edges.as_mut_slice();
     let mut joints = joints.as_mut_slice();
     let mut controls = controls.as_slice();
+    let mut radii = radii.as_slice();
     let mut views = Vec::with_capacity(roots.len());
     for (index, w) in offsets.windows(2).enumerate() {
         let n = w[1] - w[0];
@@ -293,6 +323,8 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         let (e, rest_e) = std::mem::take(&mut edges).split_at_mut(n);
         let (j, rest_j) = std::mem::take(&mut joints).split_at_mut(n);
         let (c, rest_c) = controls.split_at(n);
+        let (r, rest_r) = radii.split_at(n);
+        radii = rest_r;
         positions = rest_p;
         velocities = rest_v;
         edges = rest_e;
@@ -308,6 +340,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
             edges: e,
             joints: j,
             controls: c,
+            radii: r,
         });
     }
     views
@@ -355,9 +388,12 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         if let Some(extra) = ctx.extra_acceleration {
             a = math::add(a, extra[s.first_vertex + i]);
         }
-        let mut v = math::scale(
-            math::add(s.velocities[i], math::scale(a, dt)),
-            ctx.linear_keep,
+        // Damping slows the motion, not gravity: damping the acceleration
+        // too would scale the weight by exp(-c dt) and move the static
+        // equilibrium with c and dt.
+        let mut v = math::add(
+            math::scale(s.velocities[i], ctx.linear_keep),
+            math::scale(a, dt),
         );
         v = math::add(v, blower_dv_here);
         if let Some((alpha, grid, _)) = ctx.hair_hair {
@@ -365,13 +401,15 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         }
         work.p[i] = math::add(x, math::scale(v, dt));
     }
+    work.root_frame = math::qmul(ctx.root_transform.rotation, s.root.frame);
+    work.rest[0] = [0.0; 3];
     for e in 0..m {
         let edge = s.edges[e];
         work.q_old[e] = edge.rotation;
         work.l[e] = edge.rest_length;
-        if e == 0 {
+        if e == 0 && ctx.physical.is_none() {
             // The root frame is fixed to the scalp.
-            work.q[0] = math::qmul(ctx.root_transform.rotation, s.root.frame);
+            work.q[0] = work.root_frame;
             work.w_q[0] = 0.0;
         } else {
             let w = math::scale(edge.angular_velocity, ctx.angular_keep);
@@ -395,11 +433,16 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
     }
 
+    if let Some(physical) = ctx.physical {
+        physical_constants(&physical, s, work);
+    }
+
     // Bond-rate changes and (iii) the rest shape from the bonds (15).
     for j in 1..m {
         let joint = &s.joints[j];
         work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
+        let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
         let mut db = [0.0f32; 4];
         for k in 0..4 {
@@ -416,7 +459,65 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             effective[k] = b.min(target);
         }
         work.db[j] = db;
-        work.rest[j] = rest_darboux(omega, &effective, &joint.memories, &ctx.influences);
+        work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
+    }
+}
+
+/// The physical model's inverse masses, inverse frame inertias and
+/// compliances (METHOD H) from the density, moduli, fibre radii and rest
+/// lengths. Vertices lump half of each adjacent edge's mass `rho A l`.
+/// Frames get the inertia of their segment about its centre: `m (l^2 / 12
+/// + r^2 / 4)` across the tangent (a rigid segment's, a choice the papers
+/// leave open) and the fibre's own `m r^2 / 2` about it (twist).
+fn physical_constants(physical: &Physical, s: &StrandMut<'_>, work: &mut Work) {
+    let n = s.positions.len();
+    let m = n - 1;
+    let pi = std::f64::consts::PI;
+    let mut mass = [0.0f64; 2];
+    for e in 0..m {
+        let l = work.l[e] as f64;
+        let r = 0.5 * (s.radii[e] as f64 + s.radii[e + 1] as f64);
+        let area = pi * r * r;
+        let segment = physical.density * area * l;
+        // Vertex e gets the halves of edges e - 1 and e.
+        mass[1] = 0.5 * segment;
+        if work.w[e] > 0.0 {
+            work.w[e] = (1.0 / (mass[0] + mass[1])) as f32;
+        }
+        mass[0] = 0.5 * segment;
+        // Every frame is free: the first is clamped to the scalp by the
+        // root joint's bend/twist (see direct.rs).
+        work.w_q[e] = (1.0 / (segment * (l * l / 12.0 + r * r / 4.0))) as f32;
+        work.w_twist[e] = (1.0 / (segment * r * r / 2.0)) as f32;
+        // Stiffness falls with the cuticle from root to tip (13)-(14): the
+        // edge takes the factor of its first joint.
+        let cuticle = if m >= 2 {
+            s.joints[e.clamp(1, m - 1)].cuticle as f64
+        } else {
+            1.0
+        };
+        let e_mod = physical.youngs_modulus * cuticle;
+        let g_mod = physical.shear_modulus * cuticle;
+        let mut c = EdgeCompliance {
+            shear: l / (g_mod * area),
+            stretch: l / (e_mod * area),
+            bend: 0.0,
+            twist: 0.0,
+        };
+        // Joint e's Voronoi length; the root joint has only half an edge.
+        let (lj, joint) = if e > 0 {
+            (0.5 * (work.l[e - 1] as f64 + l), s.joints[e].cuticle as f64)
+        } else {
+            (0.5 * l, 1.0)
+        };
+        let rj = s.radii[e] as f64;
+        let inertia = pi * rj.powi(4) / 4.0;
+        c.bend = lj / (4.0 * physical.youngs_modulus * joint * inertia);
+        c.twist = lj / (4.0 * physical.shear_modulus * joint * 2.0 * inertia);
+        work.compliance[e] = c;
+    }
+    if work.w[m] > 0.0 {
+        work.w[m] = (1.0 / mass[0]) as f32;
     }
 }
 
@@ -494,12 +595,44 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         return true;
     }
     prepare(ctx, &s, work);
+    if ctx.physical.is_some() {
+        work.solve_direct(ctx, n);
+        return finish(ctx, s, work, false);
+    }
     // (iv) Constraint iterations (and collisions).
     for _ in 0..ctx.iterations {
         work.sweep(n - 1);
         work.collide(ctx, n);
     }
     finish(ctx, s, work, false)
+}
+
+impl Work {
+    /// (iv) of the physical model: `iterations` Newton-XPBD iterations,
+    /// each an exact solve of the strand's linearised compliant system,
+    /// with collisions after each.
+    fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
+        let m = n - 1;
+        self.direct.begin(&self.p[..n], &self.q[..m]);
+        for _ in 0..ctx.iterations {
+            self.direct.iterate(&DirectInput {
+                w: &self.w[..n],
+                w_q: &self.w_q[..m],
+                w_twist: &self.w_twist[..m],
+                l: &self.l[..m],
+                rest: &self.rest[..m],
+                compliance: &self.compliance[..m],
+                root_frame: self.root_frame,
+                dt: ctx.dt,
+            });
+            if !ctx.colliders.is_empty() {
+                self.direct.positions_f32(&mut self.p[..n]);
+                self.collide(ctx, n);
+                self.direct.set_positions(&self.p[..n]);
+            }
+        }
+        self.direct.end(&mut self.p[..n], &mut self.q[..m]);
+    }
 }
 
 /// Four strands' steps with their constraint sweeps in SIMD lanes when
@@ -513,6 +646,7 @@ fn step_group(
 ) -> Vec<usize> {
     let n = strands.first().map_or(0, |s| s.positions.len());
     let uniform = ctx.simd
+        && ctx.physical.is_none()
         && strands.len() == LANES
         && n >= 2
         && strands.iter().all(|s| s.active && s.positions.len() == n);
@@ -580,7 +714,8 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
     let m = n - 1;
     let dt = ctx.dt;
     let colliding = !ctx.colliders.is_empty();
-    if ctx.ftl.is_some() && !ftl_done {
+    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
+    if ftl.is_some() && !ftl_done {
         follow_the_leader(
             &mut work.p[..n],
             &work.w[..n],
@@ -600,7 +735,7 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
     // (vi) Velocities from the position change.
     for i in 0..n {
         let mut v = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
-        if let Some(correction) = ctx.ftl {
+        if let Some(correction) = ftl {
             if i + 1 < n && work.w[i] > 0.0 {
                 v = math::sub(
                     v,
@@ -639,9 +774,10 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
         let joint = &mut s.joints[j];
         if db.iter().any(|d| *d > 0.0) {
             let omega = math::darboux(work.q[j - 1], work.q[j]);
+            let omega_w = math::darboux_real(work.q[j - 1], work.q[j]);
             for ((memory, rate), d) in joint.memories.iter_mut().zip(&joint.rates).zip(&db) {
                 if *d > 0.0 {
-                    *memory = reform(*memory, *rate, *d, omega);
+                    *memory = reform(*memory, *rate, *d, omega, omega_w);
                 }
             }
         }

@@ -146,7 +146,13 @@ pub struct Prepared {
 pub fn material_of(timeline: &Timeline) -> Material {
     let m = &timeline.file.material;
     Material {
+        model: *m.model.get_ref(),
         stiffness: *m.stiffness.get_ref(),
+        youngs_modulus: *m.youngs_modulus.get_ref(),
+        shear_modulus: m.shear_modulus.as_ref().map(|g| *g.get_ref()),
+        poisson_ratio: *m.poisson_ratio.get_ref(),
+        density: *m.density.get_ref(),
+        radius: m.radius.as_ref().map(|r| *r.get_ref()),
         // Per cm in the file, per metre in the solver.
         cuticle_peel_per_meter: *m.cuticle_peel_per_cm.get_ref() * 100.0,
         bond_influences: m.bonds.get_ref().as_array(),

@@ -211,6 +211,41 @@ impl Timeline {
         if !(0.0..=1.0).contains(m.stiffness.get_ref()) {
             return fail(m.stiffness.span(), "stiffness must be in [0, 1]".into());
         }
+        let positive = |v: f32| v.is_finite() && v > 0.0;
+        if !positive(*m.youngs_modulus.get_ref()) {
+            return fail(
+                m.youngs_modulus.span(),
+                "youngs_modulus must be a positive pressure in Pa (hair: 3.5e9)".into(),
+            );
+        }
+        if let Some(g) = &m.shear_modulus {
+            if !positive(*g.get_ref()) {
+                return fail(
+                    g.span(),
+                    "shear_modulus must be a positive pressure in Pa".into(),
+                );
+            }
+        }
+        if !(-0.99..=0.5).contains(m.poisson_ratio.get_ref()) {
+            return fail(
+                m.poisson_ratio.span(),
+                "poisson_ratio must be in [-0.99, 0.5]".into(),
+            );
+        }
+        if !positive(*m.density.get_ref()) {
+            return fail(
+                m.density.span(),
+                "density must be positive, in kg/m^3 (hair: 1300)".into(),
+            );
+        }
+        if let Some(r) = &m.radius {
+            if !(positive(*r.get_ref()) && *r.get_ref() < 0.01) {
+                return fail(
+                    r.span(),
+                    "radius must be a length in (0, 0.01) metres (hair: 4e-5)".into(),
+                );
+            }
+        }
         if !(0.0..=1.0).contains(m.cuticle_peel_per_cm.get_ref()) {
             return fail(
                 m.cuticle_peel_per_cm.span(),
@@ -541,6 +576,16 @@ impl Timeline {
                 return fail(
                     b.span(),
                     "blower needs distinct finite `from`/`to` and non-negative strength and rate"
+                        .into(),
+                );
+            }
+            let cone_ok = v
+                .cone_half_angle
+                .is_none_or(|a| a.is_finite() && a > 0.0 && a < 90.0);
+            if !(v.falloff_length.is_finite() && v.falloff_length > 0.0 && cone_ok) {
+                return fail(
+                    b.span(),
+                    "blower falloff_length must be a positive length in metres and cone_half_angle in (0, 90) degrees"
                         .into(),
                 );
             }

@@ -118,12 +118,24 @@ impl BondInfluences {
     }
 }
 
-/// Material; defaults are the paper's Table 1.
+/// Material; defaults are real human hair (physical model) and the
+/// paper's Table 1 (bonds, cuticle, `k_o` of the paper model).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialSpec {
-    /// Bending/twisting stiffness `k_o` at the root, in [0, 1].
+    /// `"physical"` (real units, the default) or `"paper"` (000's `k_o`).
+    pub model: Spanned<crate::sim::Model>,
+    /// Bending/twisting stiffness `k_o` at the root, in [0, 1] (paper model).
     pub stiffness: Spanned<f32>,
+    /// Young's modulus, Pa (physical model).
+    pub youngs_modulus: Spanned<f32>,
+    /// Shear modulus, Pa; default `youngs_modulus / (2 (1 + poisson_ratio))`.
+    pub shear_modulus: Option<Spanned<f32>>,
+    pub poisson_ratio: Spanned<f32>,
+    /// Density, kg/m^3.
+    pub density: Spanned<f32>,
+    /// Fibre radius, metres; default: half the groom's `width`, else 40 um.
+    pub radius: Option<Spanned<f32>>,
     /// Cuticle peel rate: the fraction of cuticle lost per centimetre from the root.
     pub cuticle_peel_per_cm: Spanned<f32>,
     pub bonds: Spanned<BondInfluences>,
@@ -132,7 +144,13 @@ pub struct MaterialSpec {
 impl Default for MaterialSpec {
     fn default() -> Self {
         MaterialSpec {
+            model: Spanned::new(0..0, crate::sim::Model::Physical),
             stiffness: Spanned::new(0..0, 0.05),
+            youngs_modulus: Spanned::new(0..0, 3.5e9),
+            shear_modulus: None,
+            poisson_ratio: Spanned::new(0..0, 0.3),
+            density: Spanned::new(0..0, 1300.0),
+            radius: None,
             cuticle_peel_per_cm: Spanned::new(0..0, 0.0033),
             bonds: Spanned::new(0..0, BondInfluences::default()),
         }
@@ -341,6 +359,17 @@ pub struct BlowerSpec {
     /// The 0.003 of (21).
     #[serde(default = "default_blower_rate")]
     pub hydrogen_rate: f32,
+    /// Metres: strength falls as `1 / (d / falloff_length + 1)^2` with the
+    /// distance `d` from the wind's axis.
+    #[serde(default = "default_falloff_length")]
+    pub falloff_length: f32,
+    /// Degrees; no wind outside the cone (default: none).
+    #[serde(default)]
+    pub cone_half_angle: Option<f32>,
+}
+
+fn default_falloff_length() -> f32 {
+    1.0
 }
 
 fn default_blower_rate() -> f32 {

@@ -159,6 +159,8 @@ impl StagePlan {
                 to: b.to,
                 strength: b.strength,
                 hydrogen_rate: b.hydrogen_rate,
+                falloff_length: b.falloff_length,
+                cone_half_angle: b.cone_half_angle,
             }
         });
         StagePlan {

@@ -160,6 +160,9 @@ generate = { layout = "swatch", strands = 2, length = 0.24, segment_length = 0.0
 [material]
 bonds = { hydrogen = 0.35, ionic = 0.28, disulfide = 0.20, peptide = 0.17 }
 [solver]
+# The physical model (default): at dt 1/1000 the rest keeps 0.663 of the rod;
+# at 1/360 its frames lag the rolling rod a little (0.647, open).
+dt = "1/1000"
 gravity = [0.0, 0.0, 0.0]
 [[stage]]
 kind = "perm"
