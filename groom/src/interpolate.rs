@@ -100,6 +100,9 @@ impl MinimalRotation {
 /// its guides give one.
 type Frame3 = Option<[V3; 3]>;
 
+/// The axes of space, a frame that turns nothing.
+const IDENTITY: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
 /// The rotation of a render strand's root from rest to now.
 enum Turn {
     /// From the rest frame to the current one.
@@ -158,6 +161,11 @@ pub struct RenderHair {
     /// The render strand's root frame at rest (see [`RenderHair::frame`])
     /// and its weighted root tangent.
     rest_frames: Vec<(Frame3, V3)>,
+    /// The frame of its guides' roots at rest (see
+    /// [`RenderHair::scalp_frame`]): the root offset moves with the scalp
+    /// only, never with the guides' root tangents, so a root stays on the
+    /// scalp however its guides bend at their roots.
+    rest_scalp_frames: Vec<Frame3>,
     /// Per render strand: the lean at the tip at rest.
     leans: Vec<V3>,
     /// Per render vertex: the strand's own shape beyond the interpolation
@@ -351,6 +359,7 @@ impl RenderHair {
             counts,
             root_offsets: Vec::with_capacity(roots.len()),
             rest_frames: Vec::with_capacity(roots.len()),
+            rest_scalp_frames: Vec::with_capacity(roots.len()),
             leans: Vec::with_capacity(roots.len()),
             details: Vec::new(),
             clump: options.clump.clamp(0.0, 1.0),
@@ -363,6 +372,8 @@ impl RenderHair {
                 hair.frame(r, &guides.points, &offsets, direction),
                 direction,
             ));
+            hair.rest_scalp_frames
+                .push(hair.scalp_frame(r, &guides.points, &offsets));
             let lean = if options.noise > 0.0 {
                 // A random direction across the root tangent, random length.
                 let v = [rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5];
@@ -414,6 +425,17 @@ impl RenderHair {
         across.map(|x| [x, direction, cross(x, direction)])
     }
 
+    /// The frame of the roots of a render strand's three guides: from the
+    /// first to the second, and the normal of their triangle; `None` when
+    /// they span no triangle (then the offset is only translated).
+    fn scalp_frame(&self, r: usize, points: &[V3], offsets: &[usize]) -> Frame3 {
+        let root = |g: u32| points.get(offsets[g as usize]).copied().unwrap_or([0.0; 3]);
+        let [a, b, c] = self.closest[r].map(root);
+        let x = normalize(sub(b, a))?;
+        let n = normalize(cross(sub(b, a), sub(c, a)))?;
+        Some([x, n, cross(x, n)])
+    }
+
     /// Weighted guide roots and the normalised weighted root tangent.
     fn blend_roots(
         &self,
@@ -463,7 +485,14 @@ impl RenderHair {
                 self.rest_frames[r],
                 (self.frame(r, guide_points, &offsets, direction), direction),
             );
-            let root = add(blended_root, turn.apply(self.root_offsets[r]));
+            let scalp_turn = match (
+                self.rest_scalp_frames[r],
+                self.scalp_frame(r, guide_points, &offsets),
+            ) {
+                (Some(rest), Some(now)) => Turn::Frames(rest, now),
+                _ => Turn::Frames(IDENTITY, IDENTITY),
+            };
+            let root = add(blended_root, scalp_turn.apply(self.root_offsets[r]));
             let lean = turn.apply(self.leans[r]);
             let frames: Vec<(usize, MinimalRotation, f32)> = self.closest[r]
                 .iter()
