@@ -32,14 +32,7 @@ pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
 pub fn read_mesh(path: &Path) -> Result<Mesh, ImportError> {
     let mesh = match extension_of(path).as_str() {
         "obj" => parse_obj_mesh(path, &read_bytes(path)?)?,
-        "glb" | "gltf" => {
-            let (vertices, triangles) = crate::gltf::read_triangles(path)?;
-            Mesh {
-                vertices,
-                triangles,
-                corner_uvs: None,
-            }
-        }
+        "glb" | "gltf" => crate::gltf::read_mesh(path)?,
         _ => {
             return Err(ImportError::malformed(
                 path,
