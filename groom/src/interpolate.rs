@@ -172,6 +172,9 @@ pub struct RenderHair {
     /// at rest (empty when there is none).
     details: Vec<V3>,
     clump: f32,
+    /// Per render strand: its root's UV on the scalp mesh it was grown on
+    /// (`None`: the nearest guide's `root_uv`, if any, is kept).
+    root_uvs: Option<Vec<[f32; 2]>>,
 }
 
 /// SplitMix64: a fixed stream, the same on every platform.
@@ -363,6 +366,7 @@ impl RenderHair {
             leans: Vec::with_capacity(roots.len()),
             details: Vec::new(),
             clump: options.clump.clamp(0.0, 1.0),
+            root_uvs: None,
         };
         for (r, &root) in roots.iter().enumerate() {
             let (blended_root, direction) =
@@ -400,6 +404,15 @@ impl RenderHair {
             .zip(&interpolated)
             .map(|(&a, &b)| sub(a, b))
             .collect();
+        self
+    }
+
+    /// Gives each render strand its own `root_uv` (one per strand, as the
+    /// roots were given; ignored otherwise).
+    pub fn with_root_uvs(mut self, uvs: Vec<[f32; 2]>) -> RenderHair {
+        if uvs.len() == self.counts.len() {
+            self.root_uvs = Some(uvs);
+        }
         self
     }
 
@@ -581,6 +594,14 @@ impl RenderHair {
                 });
             }
         }
+        if let Some(uvs) = &self.root_uvs {
+            out.attributes.retain(|a| a.name != ROOT_UV);
+            out.attributes.push(Attribute {
+                name: ROOT_UV.into(),
+                scope: Scope::Strand,
+                values: AttributeValues::Vec2(uvs.clone()),
+            });
+        }
         out
     }
 
@@ -597,6 +618,9 @@ impl RenderHair {
         points
     }
 }
+
+/// The per-strand attribute the exporters write as the strands' UVs.
+const ROOT_UV: &str = "root_uv";
 
 fn pick(values: &AttributeValues, source: &[usize]) -> Option<AttributeValues> {
     fn take<T: Copy>(v: &[T], source: &[usize]) -> Option<Vec<T>> {

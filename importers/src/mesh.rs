@@ -9,12 +9,30 @@ use std::path::Path;
 /// Vertices and triangles (indices into the vertices) of a mesh file.
 pub type Triangles = (Vec<[f32; 3]>, Vec<[u32; 3]>);
 
+/// A mesh file's triangles and, when every face has them, the texture
+/// coordinates (U, V with V up, as `.obj` and the groom's `root_uv` have
+/// them) of each triangle's three corners.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    pub vertices: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: the UVs of its corners, in the triangle's order.
+    pub corner_uvs: Option<Vec<[[f32; 2]; 3]>>,
+}
+
 /// Reads the triangles of an `.obj`, `.glb` or `.gltf` file (node
 /// transforms applied for glTF).
 pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
+    let mesh = read_mesh(path)?;
+    Ok((mesh.vertices, mesh.triangles))
+}
+
+/// Reads the triangles and corner UVs of an `.obj`, `.glb` or `.gltf`
+/// file (node transforms applied for glTF).
+pub fn read_mesh(path: &Path) -> Result<Mesh, ImportError> {
     let mesh = match extension_of(path).as_str() {
-        "obj" => read_obj(path)?,
-        "glb" | "gltf" => crate::gltf::read_triangles(path)?,
+        "obj" => parse_obj_mesh(path, &read_bytes(path)?)?,
+        "glb" | "gltf" => crate::gltf::read_mesh(path)?,
         _ => {
             return Err(ImportError::malformed(
                 path,
@@ -23,7 +41,7 @@ pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
             ))
         }
     };
-    if mesh.1.is_empty() {
+    if mesh.triangles.is_empty() {
         return Err(ImportError::malformed(
             path,
             Place::File,
@@ -33,18 +51,27 @@ pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
     Ok(mesh)
 }
 
-fn read_obj(path: &Path) -> Result<Triangles, ImportError> {
-    parse_obj(path, &read_bytes(path)?)
+/// The triangles of an `.obj` file (see [`parse_obj_mesh`]).
+pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    let mesh = parse_obj_mesh(path, bytes)?;
+    Ok((mesh.vertices, mesh.triangles))
 }
 
-/// `v x y z [w]` vertices and `f i j k ...` faces (1-based indices, negative
-/// ones relative to the vertices read so far, `i/t/n` references keep the
-/// vertex index). Polygons become triangle fans; other statements (lines,
-/// normals, groups, materials) are skipped.
-pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+/// `v x y z [w]` vertices, `vt u [v [w]]` texture coordinates and
+/// `f i j k ...` faces (1-based indices, negative ones relative to those
+/// read so far; `i/t/n` references give the vertex and texture coordinate
+/// indices). Polygons become triangle fans; other statements (lines,
+/// normals, groups, materials) are skipped. The mesh has corner UVs when
+/// every face corner names a texture coordinate.
+pub fn parse_obj_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, ImportError> {
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    // Per triangle: its corners' texture coordinate indices, while every
+    // corner so far had one.
+    let mut corner_uv_indices: Option<Vec<[usize; 3]>> = Some(Vec::new());
     let mut forward = ForwardReferences::default();
+    let mut texture_forward = ForwardReferences::default();
     for statement in statements(path, bytes) {
         let mut statement = statement?;
         match statement.keyword {
@@ -57,12 +84,23 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
                 }
                 vertices.push(point);
             }
+            "vt" => {
+                let uv = statement.texture_coordinates()?;
+                // Bounded like the vertices: indices are at most u32::MAX.
+                if uvs.len() > u32::MAX as usize - 1 {
+                    return Err(statement.error(1, "more than 2^32 texture coordinates".into()));
+                }
+                uvs.push(uv);
+            }
             "f" => {
-                let corners: Vec<u32> = statement
-                    .vertex_indices(vertices.len(), i64::from(u32::MAX), &mut forward)?
-                    .into_iter()
-                    .map(|index| index as u32)
-                    .collect();
+                let indices = statement.corner_indices(
+                    vertices.len(),
+                    i64::from(u32::MAX),
+                    &mut forward,
+                    Some((uvs.len(), &mut texture_forward)),
+                )?;
+                let corners: Vec<u32> = indices.iter().map(|&(v, _)| v as u32).collect();
+                let textures: Option<Vec<usize>> = indices.iter().map(|&(_, t)| t).collect();
                 if corners.len() < 3 {
                     return Err(statement.error(
                         1,
@@ -73,12 +111,32 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
                 for pair in corners[1..].windows(2) {
                     triangles.push([corners[0], pair[0], pair[1]]);
                 }
+                corner_uv_indices = match (corner_uv_indices, textures) {
+                    (Some(mut fans), Some(t)) => {
+                        fans.extend(t[1..].windows(2).map(|pair| [t[0], pair[0], pair[1]]));
+                        Some(fans)
+                    }
+                    _ => None,
+                };
             }
             _ => {}
         }
     }
     forward.check(path, vertices.len())?;
-    Ok((vertices, triangles))
+    texture_forward.check_textures(path, uvs.len())?;
+    // Every index was checked against the texture coordinates read.
+    let corner_uvs = corner_uv_indices
+        .filter(|fans| !fans.is_empty())
+        .map(|fans| {
+            fans.iter()
+                .map(|t| t.map(|i| uvs.get(i).copied().unwrap_or([0.0; 2])))
+                .collect()
+        });
+    Ok(Mesh {
+        vertices,
+        triangles,
+        corner_uvs,
+    })
 }
 
 #[cfg(test)]
@@ -92,7 +150,7 @@ mod tests {
     #[test]
     fn obj_polygons_become_fans_with_relative_and_forward_indices() {
         let (v, t) =
-            parse_str("f 1 2 3\nv 0 0 0\nv 1 0 0 # x\nv 1 1 0\r\nv 0 1 0\nf 1/1 2/2/2 3//3 -1\n")
+            parse_str("f 1 2 3\nv 0 0 0\nv 1 0 0 # x\nv 1 1 0\r\nv 0 1 0\nf 1/1 2/2/2 3//3 -1\nvt 0 0\nvt 1 0\n")
                 .unwrap();
         assert_eq!(v.len(), 4);
         assert_eq!(v[3], [0.0, 1.0, 0.0]);
@@ -127,6 +185,49 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("t.obj:2:1: not UTF-8"), "{e}");
+    }
+
+    #[test]
+    fn obj_texture_coordinates_become_corner_uvs() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.25 0.5\nvt 0.75 0.5 0\n\
+                    vt 0.75 1\nvt 0.25\nf 1/1 2/2/1 3/3 4/-1\n";
+        let mesh = parse_obj_mesh(Path::new("t.obj"), text.as_bytes()).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(
+            mesh.corner_uvs,
+            Some(vec![
+                [[0.25, 0.5], [0.75, 0.5], [0.75, 1.0]],
+                [[0.25, 0.5], [0.75, 1.0], [0.25, 0.0]],
+            ])
+        );
+        // A face without texture coordinates leaves the mesh without UVs.
+        let partial = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\nf 1 2 3\n";
+        let mesh = parse_obj_mesh(Path::new("t.obj"), partial.as_bytes()).unwrap();
+        assert_eq!((mesh.triangles.len(), mesh.corner_uvs), (2, None));
+        let cases = [
+            (
+                "v 0 0 0\nvt 0 0\nf 1/1 1/2 1/1\n",
+                "t.obj:3:7: texture coordinate index 2 is out of range (the file has 1",
+            ),
+            (
+                "v 0 0 0\nvt 0 0\nf 1/1 1/-2 1/1\n",
+                "t.obj:3:7: texture coordinate index -2 is out of range (1 texture",
+            ),
+            (
+                "v 0 0 0\nvt 0 0\nf 1/0 1/1 1/1\n",
+                "t.obj:3:3: texture coordinate index 0 is out of range",
+            ),
+            (
+                "v 0 0 0\nf 1/x 1 1\n",
+                "t.obj:2:3: '1/x' has no valid texture coordinate index",
+            ),
+            ("vt nan 0\n", "t.obj:1:4: 'nan' is not a finite number"),
+            ("vt\n", "t.obj:1:3: texture coordinate has no u"),
+        ];
+        for (text, expected) in cases {
+            let e = parse_str(text).unwrap_err().to_string();
+            assert!(e.starts_with(expected), "{text:?}: {e}");
+        }
     }
 
     #[test]

@@ -92,6 +92,27 @@ impl Statement<'_> {
         Ok(point)
     }
 
+    /// The u and v of a `vt` statement (v is 0 when absent; a w after them
+    /// is ignored).
+    pub(crate) fn texture_coordinates(&mut self) -> Result<[f32; 2], ImportError> {
+        let mut uv = [0f32; 2];
+        for (k, component) in uv.iter_mut().enumerate() {
+            let Some((column, token)) = self.tokens.next() else {
+                if k == 0 {
+                    return Err(
+                        self.error(self.text.len() + 1, "texture coordinate has no u".into())
+                    );
+                }
+                break;
+            };
+            *component = match token.parse::<f32>() {
+                Ok(value) if value.is_finite() => value,
+                _ => return Err(self.error(column, format!("'{token}' is not a finite number"))),
+            };
+        }
+        Ok(uv)
+    }
+
     /// The 0-based vertex indices of an `f` or `l` statement, given how many
     /// vertices were read so far and the largest 1-based index the reader
     /// takes; indices past the vertices read so far go to `forward`.
@@ -101,36 +122,95 @@ impl Statement<'_> {
         largest: i64,
         forward: &mut ForwardReferences,
     ) -> Result<Vec<usize>, ImportError> {
-        let mut indices = Vec::new();
+        Ok(self
+            .corner_indices(vertex_count, largest, forward, None)?
+            .into_iter()
+            .map(|(vertex, _)| vertex)
+            .collect())
+    }
+
+    /// The 0-based vertex indices of the corners of an `f` statement (`i`,
+    /// `i/t`, `i/t/n`, `i//n`) and, when `textures` gives how many `vt` were
+    /// read so far, their texture coordinate indices; indices past those
+    /// read so far go to the forward references.
+    pub(crate) fn corner_indices(
+        &mut self,
+        vertex_count: usize,
+        largest: i64,
+        vertex_forward: &mut ForwardReferences,
+        mut textures: Option<(usize, &mut ForwardReferences)>,
+    ) -> Result<Vec<(usize, Option<usize>)>, ImportError> {
+        let mut corners = Vec::new();
         while let Some((column, token)) = self.tokens.next() {
-            let number = token.split('/').next().unwrap_or("");
+            let mut parts = token.split('/');
+            let number = parts.next().unwrap_or("");
             let value: i64 = number
                 .parse()
                 .map_err(|_| self.error(column, format!("'{token}' is not a vertex index")))?;
-            let index = if value > 0 && value <= largest {
-                (value - 1) as usize
-            } else if value < 0 && value.unsigned_abs() as usize <= vertex_count {
-                vertex_count - value.unsigned_abs() as usize
-            } else {
-                return Err(self.error(
-                    column,
-                    format!(
-                        "vertex index {value} is out of range ({vertex_count} vertices so far)"
-                    ),
-                ));
+            let vertex =
+                self.index(value, vertex_count, largest, column, VERTEX, vertex_forward)?;
+            let texture = match (parts.next(), textures.as_mut()) {
+                (None | Some(""), _) | (_, None) => None,
+                (Some(number), Some((texture_count, texture_forward))) => {
+                    let value: i64 = number.parse().map_err(|_| {
+                        self.error(
+                            column,
+                            format!("'{token}' has no valid texture coordinate index"),
+                        )
+                    })?;
+                    Some(self.index(
+                        value,
+                        *texture_count,
+                        largest,
+                        column,
+                        TEXTURE,
+                        texture_forward,
+                    )?)
+                }
             };
-            if index >= vertex_count {
-                forward.0.push(ForwardReference {
-                    index,
-                    line: self.line,
-                    column,
-                });
-            }
-            indices.push(index);
+            corners.push((vertex, texture));
         }
-        Ok(indices)
+        Ok(corners)
+    }
+
+    /// One 1-based (or negative, relative) index made 0-based.
+    fn index(
+        &self,
+        value: i64,
+        count: usize,
+        largest: i64,
+        column: usize,
+        noun: &'static str,
+        forward: &mut ForwardReferences,
+    ) -> Result<usize, ImportError> {
+        let index = if value > 0 && value <= largest {
+            (value - 1) as usize
+        } else if value < 0 && value.unsigned_abs() as usize <= count {
+            count - value.unsigned_abs() as usize
+        } else {
+            let so_far = if noun == VERTEX {
+                "vertices"
+            } else {
+                "texture coordinates"
+            };
+            return Err(self.error(
+                column,
+                format!("{noun} index {value} is out of range ({count} {so_far} so far)"),
+            ));
+        };
+        if index >= count {
+            forward.0.push(ForwardReference {
+                index,
+                line: self.line,
+                column,
+            });
+        }
+        Ok(index)
     }
 }
+
+const VERTEX: &str = "vertex";
+const TEXTURE: &str = "texture coordinate";
 
 /// A vertex index that refers past the vertices read so far.
 struct ForwardReference {
@@ -145,13 +225,28 @@ pub(crate) struct ForwardReferences(Vec<ForwardReference>);
 
 impl ForwardReferences {
     pub(crate) fn check(&self, path: &Path, vertex_count: usize) -> Result<(), ImportError> {
-        match self.0.iter().find(|r| r.index >= vertex_count) {
+        self.check_as(path, vertex_count, VERTEX, "vertices")
+    }
+
+    /// [`ForwardReferences::check`] for texture coordinate (`vt`) indices.
+    pub(crate) fn check_textures(&self, path: &Path, count: usize) -> Result<(), ImportError> {
+        self.check_as(path, count, TEXTURE, "texture coordinates")
+    }
+
+    fn check_as(
+        &self,
+        path: &Path,
+        count: usize,
+        noun: &str,
+        plural: &str,
+    ) -> Result<(), ImportError> {
+        match self.0.iter().find(|r| r.index >= count) {
             Some(bad) => Err(line_error(
                 path,
                 bad.line,
                 bad.column,
                 format!(
-                    "vertex index {} is out of range (the file has {vertex_count} vertices)",
+                    "{noun} index {} is out of range (the file has {count} {plural})",
                     bad.index + 1,
                 ),
             )),

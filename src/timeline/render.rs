@@ -290,7 +290,8 @@ fn from_source_links(
 }
 
 /// Render roots scattered on a scalp mesh (uniform by area), following
-/// their three nearest guides.
+/// their three nearest guides; with the mesh's UVs, each root's `root_uv`
+/// blends its triangle's corner UVs as its position does.
 fn on_scalp(
     timeline: &Timeline,
     guides: &Groom,
@@ -299,7 +300,11 @@ fn on_scalp(
     options: InterpolationOptions,
 ) -> Result<RenderHair, BakeError> {
     let path = timeline.resolve(scalp);
-    let (vertices, triangles) = importers::mesh::read_triangles(&path)?;
+    let importers::mesh::Mesh {
+        vertices,
+        triangles,
+        corner_uvs,
+    } = importers::mesh::read_mesh(&path)?;
     let corner = |t: &[u32; 3], k: usize| vertices.get(t[k] as usize).copied();
     let mut cumulative = Vec::with_capacity(triangles.len());
     let mut total = 0.0f64;
@@ -336,6 +341,7 @@ fn on_scalp(
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     };
     let mut roots = Vec::with_capacity(count);
+    let mut root_uvs = Vec::with_capacity(if corner_uvs.is_some() { count } else { 0 });
     for _ in 0..count {
         let at = unit() * total;
         let i = cumulative
@@ -352,6 +358,11 @@ fn on_scalp(
         roots.push(std::array::from_fn(|k| {
             w[0] * a[k] + w[1] * b[k] + w[2] * c[k]
         }));
+        if let Some([a, b, c]) = corner_uvs.as_ref().and_then(|uvs| uvs.get(i)) {
+            root_uvs.push(std::array::from_fn(|k| {
+                w[0] * a[k] + w[1] * b[k] + w[2] * c[k]
+            }));
+        }
     }
     let guide_roots = groom::guides::roots(guides);
     // Each render strand takes the vertex count of its nearest guide.
@@ -370,7 +381,11 @@ fn on_scalp(
                 .unwrap_or(2)
         })
         .collect();
-    Ok(RenderHair::nearest(guides, &roots, counts, options))
+    let hair = RenderHair::nearest(guides, &roots, counts, options);
+    Ok(match corner_uvs {
+        Some(_) => hair.with_root_uvs(root_uvs),
+        None => hair,
+    })
 }
 
 fn distance2(a: [f32; 3], b: [f32; 3]) -> f32 {

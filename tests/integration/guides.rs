@@ -485,6 +485,74 @@ fn render_hair_grows_on_a_scalp_mesh() {
     assert!(e.contains("scalp mesh") && e.contains("nowhere.obj"), "{e}");
 }
 
+/// Render roots grown on a scalp mesh with UVs take their `root_uv` from
+/// the mesh: on a flat quad whose UVs are linear in x and z, each root's UV
+/// is that linear map of its position, and every export carries it.
+#[test]
+fn render_hair_on_a_scalp_mesh_takes_its_uvs() {
+    let dir = TestDir::new();
+    // A 10 cm square above the generated scalp; U follows x over
+    // [0.25, 0.75], V follows z over [0.5, 1].
+    let quad = "v -0.05 0.1 -0.05\nv 0.05 0.1 -0.05\nv 0.05 0.1 0.05\nv -0.05 0.1 0.05\n\
+                vt 0.25 0.5\nvt 0.75 0.5\nvt 0.75 1.0\nvt 0.25 1.0\n\
+                f 1/1 4/4 3/3 2/2\n";
+    std::fs::write(dir.path("quad.obj"), quad).unwrap();
+    let timeline = render_timeline(
+        20,
+        "render = { count = 40, seed = 4, scalp = \"quad.obj\" }",
+        "[[export]]\npath = \"rest.abc\"\nwhat = \"rest\"\n\
+         [[export]]\npath = \"final.abc\"\nwhat = \"final\"\n\
+         [[export]]\npath = \"final.usda\"\nwhat = \"final\"\n\
+         [[export]]\npath = \"final.glb\"\nwhat = \"final\"\n",
+    );
+    std::fs::write(dir.path("t.toml"), timeline).unwrap();
+    dir.run_ok(&["bake", "t.toml", "-q"]);
+    let render_uvs = |file: &str| {
+        let (_, render) = roles(&read(&dir.path(file)));
+        let uvs = match &render.attribute("root_uv").expect("root_uv").values {
+            AttributeValues::Vec2(v) => v.clone(),
+            other => panic!("root_uv is {}", other.type_name()),
+        };
+        (render, uvs)
+    };
+    let (render, uvs) = render_uvs("rest.abc");
+    assert_eq!(uvs.len(), 40);
+    let roots: Vec<[f32; 3]> = render.strands().map(|s| s[0]).collect();
+    for uv in &uvs {
+        assert!(
+            (0.25..=0.75).contains(&uv[0]) && (0.5..=1.0).contains(&uv[1]),
+            "{uv:?} outside the quad's UVs"
+        );
+    }
+    // U follows x and V follows z: roots more than 2 cm apart along an
+    // axis (the rest roots sit within millimetres of where they were
+    // scattered) have their UVs in the same order.
+    for (i, a) in roots.iter().enumerate() {
+        for (j, b) in roots.iter().enumerate() {
+            for (axis, k) in [(0, 0), (2, 1)] {
+                if b[axis] - a[axis] > 0.02 {
+                    assert!(
+                        uvs[j][k] > uvs[i][k],
+                        "roots {a:?} {b:?}: {:?} {:?}",
+                        uvs[i],
+                        uvs[j]
+                    );
+                }
+            }
+        }
+    }
+    for file in ["final.abc", "final.usda", "final.glb"] {
+        let (_, other) = render_uvs(file);
+        assert_eq!(other.len(), uvs.len(), "{file}");
+        for (a, b) in other.iter().zip(&uvs) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-5 && (a[1] - b[1]).abs() < 1e-5,
+                "{file}: {a:?} vs {b:?}"
+            );
+        }
+    }
+}
+
 /// The guides and the render strands of a groom, each as a groom, with
 /// their frames, in metres and Y up (as glTF holds them).
 fn roles(groom: &Groom) -> (Groom, Groom) {

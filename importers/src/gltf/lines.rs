@@ -179,7 +179,10 @@ impl Document<'_> {
     }
 
     /// TEXCOORD_0 as root UVs (float VEC2 only; V flipped back).
-    fn texcoords(&self, accessor: &Accessor) -> Result<Option<AttributeValues>, ImportError> {
+    pub(super) fn texcoords(
+        &self,
+        accessor: &Accessor,
+    ) -> Result<Option<AttributeValues>, ImportError> {
         if accessor.kind != json::accessor::Type::Vec2
             || accessor.component != json::accessor::ComponentType::F32
         {

@@ -29,7 +29,7 @@ mod scene;
 mod tests;
 mod triangles;
 
-use crate::mesh::Triangles;
+use crate::mesh::{Mesh, Triangles};
 use crate::ImportError;
 use animation::Piece;
 use document::Document;
@@ -38,7 +38,7 @@ use lines::Lines;
 use std::collections::btree_map::Entry;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
-use triangles::{MAX_MESH_TRIANGLES, MAX_MESH_VERTICES};
+use triangles::{TrianglePrimitive, MAX_MESH_TRIANGLES, MAX_MESH_VERTICES};
 
 /// The most points the groom may have once instanced meshes are expanded.
 const MAX_GROOM_POINTS: usize = 1 << 26;
@@ -185,12 +185,26 @@ pub fn read_triangles(path: &Path) -> Result<Triangles, ImportError> {
     parse_triangles(path, &bytes)
 }
 
+/// [`read_triangles`] with corner UVs (see [`parse_mesh`]).
+pub fn read_mesh(path: &Path) -> Result<Mesh, ImportError> {
+    parse_mesh(path, &crate::read_bytes(path)?)
+}
+
 pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportError> {
+    let mesh = parse_mesh(path, bytes)?;
+    Ok((mesh.vertices, mesh.triangles))
+}
+
+/// [`parse_triangles`] with the corner UVs of the triangles when every
+/// triangle primitive has a float TEXCOORD_0 (V flipped back, as for
+/// strands).
+pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, ImportError> {
     let document = Document::load(path, bytes)?;
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut corner_uvs: Option<Vec<[[f32; 2]; 3]>> = Some(Vec::new());
     // A primitive shared by several nodes is decoded once.
-    let mut decoded: BTreeMap<(usize, usize), Option<Triangles>> = BTreeMap::new();
+    let mut decoded: BTreeMap<(usize, usize), Option<TrianglePrimitive>> = BTreeMap::new();
     scene::walk(&document, |node_index, node, world| {
         let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
             return Ok(());
@@ -205,7 +219,12 @@ pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportErr
                     entry.insert(document.triangles(mesh_index, primitive_index, primitive)?)
                 }
             };
-            let Some((positions, local_triangles)) = local else {
+            let Some(TrianglePrimitive {
+                positions,
+                triangles: local_triangles,
+                uvs,
+            }) = local
+            else {
                 continue;
             };
             if vertices.len() + positions.len() > MAX_MESH_VERTICES
@@ -239,10 +258,30 @@ pub fn parse_triangles(path: &Path, bytes: &[u8]) -> Result<Triangles, ImportErr
                     [base + a, base + b, base + c]
                 }
             }));
+            // Corner UVs in the same (possibly reversed) order; indices are
+            // below the primitive's vertex count, as its UVs are.
+            corner_uvs = match (corner_uvs.take(), uvs) {
+                (Some(mut all), Some(uvs)) => {
+                    let uv = |i: u32| uvs.get(i as usize).copied().unwrap_or([0.0; 2]);
+                    all.extend(local_triangles.iter().map(|&[a, b, c]| {
+                        if mirrored {
+                            [uv(a), uv(c), uv(b)]
+                        } else {
+                            [uv(a), uv(b), uv(c)]
+                        }
+                    }));
+                    Some(all)
+                }
+                _ => None,
+            };
         }
         Ok(())
     })?;
-    Ok((vertices, triangles))
+    Ok(Mesh {
+        vertices,
+        triangles,
+        corner_uvs: corner_uvs.filter(|uvs| !uvs.is_empty()),
+    })
 }
 
 fn empty_like(values: &AttributeValues) -> AttributeValues {

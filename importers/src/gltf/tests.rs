@@ -674,3 +674,40 @@ fn keyframes_times_points_beyond_the_files_bytes_are_refused_before_allocating()
         "{error}"
     );
 }
+
+/// A triangle with TEXCOORD_0, drawn by a plain and a mirroring node: the
+/// corner UVs come back with V flipped (glTF's V runs down) and follow the
+/// mirrored winding.
+#[test]
+fn triangle_texcoords_become_corner_uvs() {
+    let mut bin = Vec::new();
+    for v in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0.25f32, 0.75, 0.5, 0.75, 0.25, 0.25] {
+        bin.extend_from_slice(&v.to_le_bytes());
+    }
+    let payload = base64::engine::general_purpose::STANDARD.encode(&bin);
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0,1]}}],
+        "nodes":[{{"mesh":0}},{{"scale":[-1,1,1],"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}}}}]}}],
+        "accessors":[
+          {{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+          {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}}],
+        "buffers":[{{"byteLength":60,"uri":"data:application/octet-stream;base64,{payload}"}}]}}"#
+    );
+    let mesh = parse_mesh(Path::new("t.gltf"), json.as_bytes()).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2], [3, 5, 4]]);
+    assert_eq!(
+        mesh.corner_uvs,
+        Some(vec![
+            [[0.25, 0.25], [0.5, 0.25], [0.25, 0.75]],
+            [[0.25, 0.25], [0.25, 0.75], [0.5, 0.25]],
+        ])
+    );
+    let without = json.replace(r#","TEXCOORD_0":1"#, "");
+    let mesh = parse_mesh(Path::new("t.gltf"), without.as_bytes()).unwrap();
+    assert_eq!((mesh.triangles.len(), mesh.corner_uvs), (2, None));
+}

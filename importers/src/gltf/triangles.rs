@@ -1,9 +1,9 @@
 //! Triangle primitives for mesh colliders.
 
 use super::document::Document;
-use crate::mesh::Triangles;
 use crate::ImportError;
 use gltf::json;
+use groom::AttributeValues;
 use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 
@@ -12,6 +12,14 @@ use json::validation::Checked;
 /// file into an enormous mesh).
 pub(super) const MAX_MESH_VERTICES: usize = 1 << 24;
 pub(super) const MAX_MESH_TRIANGLES: usize = 1 << 25;
+
+/// A triangle primitive: positions, triangles (indices into them) and
+/// the TEXCOORD_0 of each position (V flipped back), if it has them.
+pub(super) struct TrianglePrimitive {
+    pub positions: Vec<[f32; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    pub uvs: Option<Vec<[f32; 2]>>,
+}
 
 impl Document<'_> {
     /// The positions and triangles (indices into those positions) of a
@@ -23,7 +31,7 @@ impl Document<'_> {
         mesh_index: usize,
         primitive_index: usize,
         primitive: &json::mesh::Primitive,
-    ) -> Result<Option<Triangles>, ImportError> {
+    ) -> Result<Option<TrianglePrimitive>, ImportError> {
         let place = format!("/meshes/{mesh_index}/primitives/{primitive_index}");
         let mode = self.valid(&primitive.mode, "primitive mode", || {
             format!("{place}/mode")
@@ -89,6 +97,23 @@ impl Document<'_> {
             }
         }
         triangles.retain(|[a, b, c]| a != b && b != c && a != c);
-        Ok(Some((positions, triangles)))
+        let uvs = match primitive
+            .attributes
+            .get(&Checked::Valid(Semantic::TexCoords(0)))
+        {
+            Some(&uv) => {
+                let accessor = self.accessor(uv, || format!("{place}/attributes/TEXCOORD_0"))?;
+                match self.texcoords(&accessor)? {
+                    Some(AttributeValues::Vec2(uvs)) if uvs.len() == positions.len() => Some(uvs),
+                    _ => None,
+                }
+            }
+            None => None,
+        };
+        Ok(Some(TrianglePrimitive {
+            positions,
+            triangles,
+            uvs,
+        }))
     }
 }
