@@ -153,7 +153,7 @@ fn bake_and_report(
     };
     let outcome = bake(&timeline, &options).map_err(classify)?;
     if wants_html(args.report.as_deref()) {
-        *html = Some(sheet_png(&timeline, &outcome.snapshots)?);
+        *html = Some(sheet_png(&timeline, &outcome.snapshots, &outcome.rods)?);
         *snapshots = outcome.snapshots;
     }
     let started = std::mem::take(&mut report.started);
@@ -178,8 +178,13 @@ fn bake_and_report(
 }
 
 /// The contact sheet of a bake's snapshots, as PNG bytes for the HTML page.
-fn sheet_png(timeline: &Timeline, snapshots: &[(String, groom::Groom)]) -> anyhow::Result<Vec<u8>> {
-    let sheet = groombake::timeline::bake::sheet_image(timeline, snapshots).map_err(classify)?;
+fn sheet_png(
+    timeline: &Timeline,
+    snapshots: &[(String, groom::Groom)],
+    rods: &[groombake::timeline::surfaces::RodSnapshot],
+) -> anyhow::Result<Vec<u8>> {
+    let sheet =
+        groombake::timeline::bake::sheet_image(timeline, snapshots, rods).map_err(classify)?;
     Ok(groombake::preview::png_bytes(&sheet)?)
 }
 

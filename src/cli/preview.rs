@@ -169,7 +169,7 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
     if args.color.is_some() {
         preview_options.color_by = args.color.clone();
     }
-    let surfaces = snapshot_surfaces(&timeline).map_err(super::bake::classify)?;
+    let surfaces = snapshot_surfaces(&timeline, &outcome.rods).map_err(super::bake::classify)?;
     let rest = ("rest shape".to_string(), outcome.rest.clone());
     // The rest shape is drawn alone: nothing holds it.
     let alone: &[Surface] = &[];
@@ -179,7 +179,7 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
         Some(n) => vec![(
             outcome.snapshots.get(n).ok_or_else(|| {
                 BadInput(format!(
-                    "{}: --frame {n}: the timeline has {} snapshots (before and after each stage)",
+                    "{}: --frame {n}: the timeline has {} snapshots (before, after each stage, during a perm)",
                     args.file.display(),
                     outcome.snapshots.len()
                 ))

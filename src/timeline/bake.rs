@@ -72,6 +72,8 @@ pub struct BakeMonitor {
 pub struct BakeOutcome {
     pub report: BakeReport,
     pub snapshots: Vec<(String, Groom)>,
+    /// The perm rods of the snapshots taken during a perm.
+    pub rods: Vec<super::surfaces::RodSnapshot>,
     /// The plastic rest shape at the end (as the `rest` export writes it).
     pub rest: Groom,
 }
@@ -501,20 +503,23 @@ fn sheet_curve_form(timeline: &Timeline) -> groom::curves::CurveForm {
 fn write_sheet(
     timeline: &Timeline,
     snapshots: &[(String, Groom)],
+    rods: &[super::surfaces::RodSnapshot],
     path: &Path,
 ) -> Result<(), BakeError> {
-    crate::preview::write_png(&sheet_image(timeline, snapshots)?, path)?;
+    crate::preview::write_png(&sheet_image(timeline, snapshots, rods)?, path)?;
     Ok(())
 }
 
 /// The before/after contact sheet of a bake's snapshots, with the colliders
-/// active in each (the sheet export and the HTML report draw the same).
+/// active in each and a perm's rods (the sheet export and the HTML report
+/// draw the same).
 pub fn sheet_image(
     timeline: &Timeline,
     snapshots: &[(String, Groom)],
+    rods: &[super::surfaces::RodSnapshot],
 ) -> Result<crate::preview::Image, BakeError> {
     let options = sheet_options(timeline, snapshots);
-    let surfaces = super::surfaces::snapshot_surfaces(timeline)?;
+    let surfaces = super::surfaces::snapshot_surfaces(timeline, rods)?;
     let entries: Vec<crate::preview::SheetEntry> = snapshots
         .iter()
         .zip(&surfaces)
@@ -685,6 +690,7 @@ struct BakeRun<'a> {
     /// Steps done over all stages.
     step_index: u64,
     snapshots: Vec<(String, Groom)>,
+    rods: Vec<super::surfaces::RodSnapshot>,
     report: BakeReport,
 }
 
@@ -796,6 +802,7 @@ impl<'a> BakeRun<'a> {
             animated: Vec::new(),
             step_index: 0,
             snapshots: Vec::new(),
+            rods: Vec::new(),
             report,
         };
         if !removed.is_empty() {
@@ -893,6 +900,35 @@ impl<'a> BakeRun<'a> {
         self.snapshots.push((label, groom));
     }
 
+    /// Keeps the hair wound on its perm rods, with the rods, at the step
+    /// whose start ends the set phase (the rods unroll in it); the stage's
+    /// name labels it ("during perm").
+    fn snapshot_before_unroll(
+        &mut self,
+        stage: &StageRun<'_>,
+        stage_index: usize,
+        t_local: f64,
+        time: f64,
+    ) {
+        let (Some(rods), Some(perm)) = (&stage.rods, &stage.plan.perm) else {
+            return;
+        };
+        if stage.unrolled || t_local < perm.set_end {
+            return;
+        }
+        let name = self.timeline.file.stages.get_ref()[stage_index]
+            .name
+            .clone()
+            .unwrap_or_else(|| stage.plan.kind.name().to_string());
+        self.rods.push(super::surfaces::RodSnapshot {
+            snapshot: self.snapshots.len(),
+            stage: stage_index,
+            time,
+            rods: rods.cylinders(),
+        });
+        self.snapshot(format!("during {name}"));
+    }
+
     /// Phase 2: runs every stage in order.
     fn run_stages(&mut self) -> Result<(), BakeError> {
         let total_steps: u64 = self.stage_steps.iter().sum();
@@ -949,6 +985,7 @@ impl<'a> BakeRun<'a> {
             self.options.interrupted()?;
             let t_local = local_step as f64 * dt;
             let t_end = global_time + (local_step + 1) as f64 * dt;
+            self.snapshot_before_unroll(&stage, stage_index, t_local, global_time + t_local);
             let (contained, blowups) = self.advance(&mut stage, t_local, t_end)?;
             stage_report.contained_strands.extend(contained);
             for b in blowups {
@@ -1155,7 +1192,7 @@ impl<'a> BakeRun<'a> {
         if let (Some(_), false) = (&self.timeline.file.preview, self.options.dry) {
             let index = self.exports.len();
             let (path, staged) = (&self.finals[index], &self.staged[index]);
-            write_sheet(self.timeline, &self.snapshots, staged)?;
+            write_sheet(self.timeline, &self.snapshots, &self.rods, staged)?;
             self.report
                 .outputs
                 .push(output_report(staged, path, "sheet".into(), None)?);
@@ -1175,6 +1212,7 @@ impl<'a> BakeRun<'a> {
         Ok(BakeOutcome {
             report: self.report,
             snapshots: self.snapshots,
+            rods: self.rods,
             rest,
         })
     }

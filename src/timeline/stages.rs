@@ -222,7 +222,22 @@ pub struct PermRods {
     /// Per strand: the polyline at the stage start, its arc lengths, and
     /// the rod frame (axis, normal toward the rod centre, tangent).
     strands: Vec<Option<RodStrand>>,
+    /// The radius of the path the hair's centreline takes (rod + hair, m).
     radius: f32,
+    /// The rod's own radius (m).
+    rod_radius: f32,
+}
+
+/// One perm rod to draw: a cylinder of `radius` (m) about `axis` through
+/// `center`, `half_length` (m) each side; `across` is a unit vector
+/// perpendicular to the axis.
+#[derive(Debug, Clone, Copy)]
+pub struct RodCylinder {
+    pub center: [f32; 3],
+    pub axis: [f32; 3],
+    pub across: [f32; 3],
+    pub radius: f32,
+    pub half_length: f32,
 }
 
 #[derive(Debug, Clone)]
@@ -298,6 +313,7 @@ impl PermRods {
         PermRods {
             strands: rods,
             radius: plan.radius + hair_radius,
+            rod_radius: plan.radius,
         }
     }
 
@@ -330,6 +346,34 @@ impl PermRods {
             }
         }
         Ok(())
+    }
+
+    /// The rods as the wound strands sit on them at the end of the roll
+    /// (progress 1): per rod its centre, axis, radius (m) and half-length
+    /// (m) along the axis. A rod spans the turns' spread along it plus one
+    /// rod radius each side, as a real rod is longer than the hair on it.
+    pub fn cylinders(&self) -> Vec<RodCylinder> {
+        let rho = self.radius as f64;
+        self.strands
+            .iter()
+            .flatten()
+            .map(|rod| {
+                let total = rod.arc.last().copied().unwrap_or(0.0);
+                let contact = point_at_arc(&rod.points, &rod.arc, total - rod.wound_length);
+                let turns = rod.wound_length / (std::f64::consts::TAU * rho);
+                // As `wind` shifts the turns along the rod.
+                let spread = turns * 4.0 * (rho - self.radius as f64 + 1e-5);
+                RodCylinder {
+                    center: [0, 1, 2].map(|k| {
+                        (contact[k] + rho * rod.normal[k] + 0.5 * spread * rod.axis[k]) as f32
+                    }),
+                    axis: rod.axis.map(|c| c as f32),
+                    across: rod.tangent.map(|c| c as f32),
+                    radius: self.rod_radius,
+                    half_length: (0.5 * spread) as f32 + self.rod_radius,
+                }
+            })
+            .collect()
     }
 
     /// Releases every target the rods set.

@@ -406,3 +406,57 @@ duration = 0.05
         collider.len()
     );
 }
+
+/// Pixels of a perm rod's pink: red well above green and blue above green
+/// (the hair is brown, blue below green; the background neutral grey).
+fn rod_pixels(pixels: &[u8]) -> usize {
+    pixels
+        .chunks_exact(3)
+        .filter(|p| i32::from(p[0]) > i32::from(p[1]) + 25 && p[2] > p[1] + 5)
+        .count()
+}
+
+#[test]
+fn perm_sheet_shows_the_hair_wound_on_its_rods() {
+    use groombake::timeline::bake::{bake, BakeOptions};
+    use groombake::timeline::Timeline;
+    let timeline = Timeline::load(&crate::util::sample("perm.toml")).unwrap();
+    let options = BakeOptions {
+        dry: true,
+        monitor: None,
+        ..BakeOptions::default()
+    };
+    let outcome = bake(&timeline, &options).unwrap();
+    let labels: Vec<&str> = outcome.snapshots.iter().map(|(l, _)| l.as_str()).collect();
+    assert_eq!(
+        labels,
+        ["before", "during perm", "after perm", "after release"]
+    );
+    // One rod per strand, under the "during perm" snapshot only.
+    assert_eq!(outcome.rods.len(), 1);
+    assert_eq!(outcome.rods[0].snapshot, 1);
+    assert_eq!(outcome.rods[0].rods.len(), 100);
+    let surfaces =
+        groombake::timeline::surfaces::snapshot_surfaces(&timeline, &outcome.rods).unwrap();
+    assert_eq!(surfaces.len(), outcome.snapshots.len());
+    // The rods are drawn: their pink in the "during perm" picture, none
+    // after the perm (the rods are gone).
+    let dir = TestDir::new();
+    let perm = crate::util::sample("perm.toml");
+    let perm = perm.to_str().unwrap();
+    let mut counts = Vec::new();
+    for frame in ["1", "2"] {
+        let out = dir.path(&format!("perm{frame}.png"));
+        let out = out.to_str().unwrap();
+        dir.run_ok(&[
+            "preview", perm, "-o", out, "--frame", frame, "--size", "200x200",
+        ]);
+        counts.push(rod_pixels(&decode(Path::new(out)).2));
+    }
+    assert!(
+        counts[0] > 100,
+        "only {} rod pixels during the perm",
+        counts[0]
+    );
+    assert_eq!(counts[1], 0, "rod pixels after the perm");
+}
