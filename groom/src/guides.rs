@@ -49,55 +49,12 @@ impl Groom {
     pub fn subset(&self, indices: &[usize]) -> Groom {
         let offsets = self.strand_offsets();
         let strands = self.strand_count();
-        let indices: Vec<usize> = indices
+        let kept: Vec<usize> = indices
             .iter()
             .copied()
             .filter(|&i| i < strands && offsets[i + 1] <= self.points.len())
             .collect();
-        let vertex_ranges: Vec<std::ops::Range<usize>> = indices
-            .iter()
-            .map(|&i| offsets[i]..offsets[i + 1])
-            .collect();
-        let gather_points = |points: &[[f32; 3]]| -> Vec<[f32; 3]> {
-            vertex_ranges
-                .iter()
-                .flat_map(|r| points.get(r.clone()).unwrap_or(&[]).iter().copied())
-                .collect()
-        };
-        let mut out = Groom {
-            strand_vertex_counts: indices
-                .iter()
-                .map(|&i| self.strand_vertex_counts[i])
-                .collect(),
-            points: gather_points(&self.points),
-            attributes: Vec::new(),
-            frames: self
-                .frames
-                .iter()
-                .map(|f| Frame {
-                    time: f.time,
-                    points: gather_points(&f.points),
-                })
-                .collect(),
-            units: self.units,
-            up_axis: self.up_axis,
-            basis: self.basis,
-            provenance: self.provenance.clone(),
-        };
-        for attribute in &self.attributes {
-            let elements: Vec<usize> = match attribute.scope {
-                Scope::Strand => indices.clone(),
-                Scope::Vertex => vertex_ranges.iter().flat_map(|r| r.clone()).collect(),
-            };
-            if let Some(values) = gather(&attribute.values, &elements) {
-                out.attributes.push(Attribute {
-                    name: attribute.name.clone(),
-                    scope: attribute.scope,
-                    values,
-                });
-            }
-        }
-        out
+        self.select_strands(&kept)
     }
 
     /// The guides and the render strands as two grooms, with the strand
@@ -210,19 +167,6 @@ pub fn pick_every(roots: &[[f32; 3]], every: usize) -> Vec<usize> {
     let mut picked: Vec<usize> = order.into_iter().step_by(every).collect();
     picked.sort_unstable();
     picked
-}
-
-/// The values at `elements`; `None` if an index is out of range.
-fn gather(values: &AttributeValues, elements: &[usize]) -> Option<AttributeValues> {
-    fn pick<T: Copy>(v: &[T], elements: &[usize]) -> Option<Vec<T>> {
-        elements.iter().map(|&i| v.get(i).copied()).collect()
-    }
-    Some(match values {
-        AttributeValues::Float(v) => AttributeValues::Float(pick(v, elements)?),
-        AttributeValues::Vec2(v) => AttributeValues::Vec2(pick(v, elements)?),
-        AttributeValues::Vec3(v) => AttributeValues::Vec3(pick(v, elements)?),
-        AttributeValues::Int(v) => AttributeValues::Int(pick(v, elements)?),
-    })
 }
 
 /// Guides then render strands as one groom, with the Unreal attributes
