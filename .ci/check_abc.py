@@ -280,14 +280,12 @@ def check_file(path, failures):
                 failures.add(name, f"Unreal groom attributes missing from .arbGeomParams: {missing}")
     if "scaled" in expect:
         check_scaled(path, totals["positions"], expect["scaled"], failures)
-    known = {
-        "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
-        "unreal_groom", "scaled",
-    }
     if "guides" in expect and expect["guides"] != totals["guides"]:
         failures.add(name, f"guides: expected {expect['guides']}, found {totals['guides']}")
-    known = {"kind", "curves", "points", "samples", "times", "objects", "basis", "width", "unreal_groom",
-             "guides"}
+    known = {
+        "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
+        "unreal_groom", "scaled", "guides",
+    }
     unknown = set(expect) - known
     if unknown:
         failures.add(name, f"unknown expectation keys {sorted(unknown)}")
