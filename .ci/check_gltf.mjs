@@ -11,22 +11,10 @@
 
 import fs from "node:fs";
 import path from "node:path";
+import { gltfFilesFromArguments } from "./gltf_files.mjs";
 import validator from "gltf-validator";
 
-const directory = process.argv[2];
-if (!directory) {
-  console.error("usage: node check_gltf.mjs DIR");
-  process.exit(2);
-}
-
-const files = fs
-  .readdirSync(directory)
-  .filter((name) => /\.(glb|gltf)$/i.test(name))
-  .sort();
-if (files.length === 0) {
-  console.error(`check_gltf: no .glb or .gltf file in ${directory}`);
-  process.exit(1);
-}
+const { directory, files } = gltfFilesFromArguments("check_gltf");
 
 // Expectation key -> how to read it from the validator's report.
 const checks = {

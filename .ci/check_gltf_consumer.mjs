@@ -15,21 +15,10 @@
 
 import fs from "node:fs";
 import path from "node:path";
+import { gltfFilesFromArguments } from "./gltf_files.mjs";
 import { NodeIO } from "@gltf-transform/core";
 
-const directory = process.argv[2];
-if (!directory) {
-  console.error("usage: node check_gltf_consumer.mjs DIR");
-  process.exit(2);
-}
-const files = fs
-  .readdirSync(directory)
-  .filter((name) => /\.(glb|gltf)$/i.test(name))
-  .sort();
-if (files.length === 0) {
-  console.error(`check_gltf_consumer: no .glb or .gltf file in ${directory}`);
-  process.exit(1);
-}
+const { directory, files } = gltfFilesFromArguments("check_gltf_consumer");
 
 // The JSON part of a file, to compare with what the consumer loaded.
 function rawJson(bytes, name) {
