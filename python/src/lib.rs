@@ -634,7 +634,7 @@ fn bake(
                 continue;
             }
             if let Err(e) = py.check_signals() {
-                monitor.cancel.store(true, Ordering::Relaxed);
+                monitor.cancel();
                 interrupted = Some(e);
                 continue;
             }
@@ -643,7 +643,7 @@ fn bake(
                 if now > last {
                     last = now;
                     if let Err(e) = callback.call1((now,)) {
-                        monitor.cancel.store(true, Ordering::Relaxed);
+                        monitor.cancel();
                         interrupted = Some(e);
                     }
                 }

@@ -3,7 +3,7 @@
 
 use super::BadInput;
 use clap::Args;
-use groombake::timeline::bake::{bake, plan_outputs, prepare, BakeError, BakeOptions};
+use groombake::timeline::bake::{bake, plan_outputs, prepare, BakeError, BakeMonitor, BakeOptions};
 use groombake::timeline::report::BakeReport;
 use groombake::timeline::Timeline;
 use std::io::IsTerminal;
@@ -64,21 +64,20 @@ pub fn classify(error: BakeError) -> anyhow::Error {
     }
 }
 
-/// SIGINT, SIGTERM and SIGHUP set the returned number (the signal's) so a
-/// bake stops at its next step and removes its temporaries; a second such
-/// signal ends the process at once.
-fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
+/// SIGINT, SIGTERM and SIGHUP store their number in `stop` (the bake's
+/// [`BakeMonitor::stop`]) so the bake stops at its next step and removes
+/// its temporaries; a second such signal ends the process at once.
+fn stop_on_signals(stop: &Arc<AtomicUsize>) -> anyhow::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-    let signal = Arc::new(AtomicUsize::new(0));
     for number in [SIGINT, SIGTERM, SIGHUP] {
         let stop_now = Arc::new(std::sync::atomic::AtomicBool::new(false));
         // The conditional shutdown is registered first, so it sees the flag
         // from the signal before this one.
         signal_hook::flag::register_conditional_shutdown(number, 128 + number, stop_now.clone())?;
         signal_hook::flag::register(number, stop_now)?;
-        signal_hook::flag::register_usize(number, signal.clone(), number as usize)?;
+        signal_hook::flag::register_usize(number, stop.clone(), number as usize)?;
     }
-    Ok(signal)
+    Ok(())
 }
 
 /// The report path itself is unusable: bad input, and no report is written.
@@ -137,7 +136,8 @@ fn bake_and_report(
     html: &mut Option<Vec<u8>>,
     snapshots: &mut Vec<(String, groom::Groom)>,
 ) -> anyhow::Result<()> {
-    let interrupt = stop_on_signals()?;
+    let monitor = Arc::new(BakeMonitor::default());
+    stop_on_signals(&monitor.stop)?;
     let timeline = Timeline::load(&args.timeline).map_err(|e| BadInput(e.to_string()))?;
     report.record_sources(&timeline);
     let options = BakeOptions {
@@ -146,9 +146,8 @@ fn bake_and_report(
         seed: args.seed,
         progress: !args.quiet && std::io::stderr().is_terminal(),
         dry: false,
-        monitor: None,
+        monitor: Some(monitor),
         report: args.report.clone(),
-        interrupt: Some(interrupt),
         strict: args.strict,
     };
     let outcome = bake(&timeline, &options).map_err(classify)?;

@@ -32,39 +32,57 @@ pub struct BakeOptions {
     /// Run without writing the timeline's exports and sheet (a preview of
     /// the timeline keeps only the snapshots).
     pub dry: bool,
-    /// Progress and cancellation shared with another thread (the Python
-    /// module polls it while the GIL is released).
+    /// Progress, and a request to stop, shared with another thread or a
+    /// signal handler (the CLI's signals, the Python module's Ctrl-C).
     pub monitor: Option<std::sync::Arc<BakeMonitor>>,
     /// Where the caller will write the report: checked with the outputs,
     /// and the old one removed before the outputs are renamed into place.
     pub report: Option<PathBuf>,
-    /// Set to a signal's number (by a signal handler) to stop the bake; it
-    /// stops at the next step and removes its temporaries.
-    pub interrupt: Option<Arc<AtomicUsize>>,
     /// Refuse, before simulating, exports that would change the data
     /// (`exporters::warnings`), instead of warning.
     pub strict: bool,
 }
 
 impl BakeOptions {
-    /// The signal that asked the bake to stop, if one did.
+    /// Whether the caller asked the bake to stop.
     fn interrupted(&self) -> Result<(), BakeError> {
-        match self.interrupt.as_ref().map(|i| i.load(Ordering::Relaxed)) {
-            Some(signal) if signal != 0 => Err(BakeError::Interrupted { signal }),
-            _ => Ok(()),
-        }
+        self.monitor
+            .as_ref()
+            .map_or(Ok(()), |monitor| monitor.stop_requested())
     }
 }
 
-/// The steps a running bake has done, and a request to stop it.
+/// The steps a running bake has done, and a request to stop it: the one
+/// way to stop a bake, for a signal handler and for another thread alike.
 #[derive(Debug, Default)]
 pub struct BakeMonitor {
     pub steps_done: std::sync::atomic::AtomicU64,
     /// Known once the bake is prepared (0 before).
     pub steps_total: std::sync::atomic::AtomicU64,
-    /// Set to stop the bake after its current step ([`BakeError::Cancelled`]);
-    /// no output is left half-written.
-    pub cancel: std::sync::atomic::AtomicBool,
+    /// 0 while the bake may run. A signal handler stores the signal's
+    /// number ([`BakeError::Interrupted`]); [`BakeMonitor::cancel`] stores
+    /// [`BakeMonitor::CANCELLED`] ([`BakeError::Cancelled`]). The bake stops
+    /// before its next step or output, removes its temporaries and
+    /// replaces no output. An `Arc` so a signal handler can hold it.
+    pub stop: Arc<AtomicUsize>,
+}
+
+impl BakeMonitor {
+    /// The `stop` value of a caller's request (no signal has this number).
+    pub const CANCELLED: usize = usize::MAX;
+
+    /// Asks the bake to stop ([`BakeError::Cancelled`]).
+    pub fn cancel(&self) {
+        self.stop.store(Self::CANCELLED, Ordering::Relaxed);
+    }
+
+    fn stop_requested(&self) -> Result<(), BakeError> {
+        match self.stop.load(Ordering::Relaxed) {
+            0 => Ok(()),
+            Self::CANCELLED => Err(BakeError::Cancelled),
+            signal => Err(BakeError::Interrupted { signal }),
+        }
+    }
 }
 
 /// What a bake leaves besides its files: the report and the groom before
@@ -999,9 +1017,6 @@ impl<'a> BakeRun<'a> {
             self.step_index += 1;
             if let Some(monitor) = &self.options.monitor {
                 monitor.steps_done.store(self.step_index, Ordering::Relaxed);
-                if monitor.cancel.load(Ordering::Relaxed) {
-                    return Err(BakeError::Cancelled);
-                }
             }
             self.write_due_frames()?;
             stage_bar.inc(1);
