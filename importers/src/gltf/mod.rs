@@ -35,7 +35,6 @@ use animation::Piece;
 use document::Document;
 use groom::{Attribute, AttributeValues, Groom, Units, UpAxis};
 use lines::Lines;
-use std::collections::btree_map::Entry;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use triangles::{TrianglePrimitive, MAX_MESH_TRIANGLES, MAX_MESH_VERTICES};
@@ -109,32 +108,15 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
 /// Every line primitive of the scene decoded once, and each of its
 /// instances with its world matrix.
 fn line_pieces(document: &Document) -> Result<(Vec<Lines>, Vec<Piece>), ImportError> {
-    let mut decoded: Vec<Lines> = Vec::new();
-    let mut slot_of: BTreeMap<(usize, usize), Option<usize>> = BTreeMap::new();
     let mut pieces = Vec::new();
     let mut points = 0usize;
-    scene::walk(document, |node_index, node, world| {
-        let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
-            return Ok(());
-        };
-        let mesh = document.get(&document.root.meshes, mesh_index, "mesh", || {
-            format!("/nodes/{node_index}/mesh")
-        })?;
-        for (primitive_index, primitive) in mesh.primitives.iter().enumerate() {
-            let slot = match slot_of.entry((mesh_index, primitive_index)) {
-                Entry::Occupied(entry) => *entry.get(),
-                Entry::Vacant(entry) => {
-                    let lines = document.lines(mesh_index, mesh, primitive_index, primitive)?;
-                    *entry.insert(lines.map(|lines| {
-                        decoded.push(lines);
-                        decoded.len() - 1
-                    }))
-                }
-            };
-            let Some(slot) = slot else {
-                continue;
-            };
-            points += decoded[slot].point_count();
+    let decoded = scene::walk_primitives(
+        document,
+        |mesh_index, mesh, primitive_index, primitive| {
+            document.lines(mesh_index, mesh, primitive_index, primitive)
+        },
+        |node_index, world, slot, lines| {
+            points += lines.point_count();
             if points > MAX_GROOM_POINTS {
                 return Err(document.error(
                     format!("/nodes/{node_index}"),
@@ -149,9 +131,9 @@ fn line_pieces(document: &Document) -> Result<(Vec<Lines>, Vec<Piece>), ImportEr
                 world,
                 node: node_index,
             });
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     Ok((decoded, pieces))
 }
 
@@ -203,30 +185,17 @@ pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, ImportError> {
     let mut vertices: Vec<[f32; 3]> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut corner_uvs: Option<Vec<[[f32; 2]; 3]>> = Some(Vec::new());
-    // A primitive shared by several nodes is decoded once.
-    let mut decoded: BTreeMap<(usize, usize), Option<TrianglePrimitive>> = BTreeMap::new();
-    scene::walk(&document, |node_index, node, world| {
-        let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
-            return Ok(());
-        };
-        let mesh = document.get(&document.root.meshes, mesh_index, "mesh", || {
-            format!("/nodes/{node_index}/mesh")
-        })?;
-        for (primitive_index, primitive) in mesh.primitives.iter().enumerate() {
-            let local = match decoded.entry((mesh_index, primitive_index)) {
-                Entry::Occupied(entry) => entry.into_mut(),
-                Entry::Vacant(entry) => {
-                    entry.insert(document.triangles(mesh_index, primitive_index, primitive)?)
-                }
-            };
-            let Some(TrianglePrimitive {
+    scene::walk_primitives(
+        &document,
+        |mesh_index, _, primitive_index, primitive| {
+            document.triangles(mesh_index, primitive_index, primitive)
+        },
+        |node_index, world, _, primitive| {
+            let TrianglePrimitive {
                 positions,
                 triangles: local_triangles,
                 uvs,
-            }) = local
-            else {
-                continue;
-            };
+            } = primitive;
             if vertices.len() + positions.len() > MAX_MESH_VERTICES
                 || triangles.len() + local_triangles.len() > MAX_MESH_TRIANGLES
             {
@@ -274,9 +243,9 @@ pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, ImportError> {
                 }
                 _ => None,
             };
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     Ok(Mesh {
         vertices,
         triangles,

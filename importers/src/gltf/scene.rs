@@ -4,6 +4,8 @@
 use super::document::Document;
 use crate::ImportError;
 use gltf::json;
+use std::collections::btree_map::Entry;
+use std::collections::BTreeMap;
 
 pub(super) type Matrix = [[f32; 4]; 4];
 
@@ -130,4 +132,48 @@ pub(super) fn transform(m: &Matrix, p: [f32; 3]) -> [f32; 3] {
         *value = m[0][row] * p[0] + m[1][row] * p[1] + m[2][row] * p[2] + m[3][row];
     }
     out
+}
+
+/// Every instance of every mesh primitive of the default scene, in [`walk`]
+/// order: each (mesh, primitive) is decoded once by `decode` (`None`: not
+/// of the wanted kind, skipped), then `visit` gets the node's index, its
+/// world matrix, the decoded primitive's slot and the primitive, for each
+/// node that instances it. Returns the decoded primitives by slot.
+pub(super) fn walk_primitives<T>(
+    document: &Document,
+    mut decode: impl FnMut(
+        usize,
+        &json::Mesh,
+        usize,
+        &json::mesh::Primitive,
+    ) -> Result<Option<T>, ImportError>,
+    mut visit: impl FnMut(usize, Matrix, usize, &T) -> Result<(), ImportError>,
+) -> Result<Vec<T>, ImportError> {
+    let mut decoded: Vec<T> = Vec::new();
+    let mut slot_of: BTreeMap<(usize, usize), Option<usize>> = BTreeMap::new();
+    walk(document, |node_index, node, world| {
+        let Some(mesh_index) = node.mesh.map(|m| m.value()) else {
+            return Ok(());
+        };
+        let mesh = document.get(&document.root.meshes, mesh_index, "mesh", || {
+            format!("/nodes/{node_index}/mesh")
+        })?;
+        for (primitive_index, primitive) in mesh.primitives.iter().enumerate() {
+            let slot = match slot_of.entry((mesh_index, primitive_index)) {
+                Entry::Occupied(entry) => *entry.get(),
+                Entry::Vacant(entry) => {
+                    let primitive = decode(mesh_index, mesh, primitive_index, primitive)?;
+                    *entry.insert(primitive.map(|p| {
+                        decoded.push(p);
+                        decoded.len() - 1
+                    }))
+                }
+            };
+            if let Some(slot) = slot {
+                visit(node_index, world, slot, &decoded[slot])?;
+            }
+        }
+        Ok(())
+    })?;
+    Ok(decoded)
 }
