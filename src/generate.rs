@@ -183,28 +183,12 @@ impl SplitMix64 {
     }
 }
 
-type V3 = [f64; 3];
+use groom::math::double::{add, cross, scale, try_normalize, V3};
 
-fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: V3, s: f64) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
+/// Unit `a`; straight up for a vector without direction (the generator's
+/// directions are bounded, so this only guards a degenerate input).
 fn normalize(a: V3) -> V3 {
-    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-    if n > 0.0 {
-        scale(a, 1.0 / n)
-    } else {
-        [0.0, 1.0, 0.0]
-    }
+    try_normalize(a).unwrap_or([0.0, 1.0, 0.0])
 }
 
 /// Builds the groom. Also writes the per-strand `root_uv` (spherical

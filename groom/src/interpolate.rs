@@ -25,31 +25,7 @@
 
 use crate::{Attribute, AttributeValues, Groom, Scope};
 
-type V3 = [f32; 3];
-
-fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn normalize(a: V3) -> Option<V3> {
-    let n = dot(a, a).sqrt();
-    (n > 1e-20 && n.is_finite()).then(|| scale(a, 1.0 / n))
-}
+use crate::math::single::{add, cross, dot, scale, sub, try_normalize as normalize, V3};
 
 /// The smallest rotation taking unit vector `from` onto unit vector `to`.
 #[derive(Debug, Clone, Copy)]

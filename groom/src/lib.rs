@@ -11,6 +11,7 @@ mod attributes;
 pub mod curves;
 pub mod guides;
 pub mod interpolate;
+pub mod math;
 mod units;
 mod validate;
 

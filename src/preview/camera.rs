@@ -2,31 +2,11 @@
 
 use super::View;
 
-pub(crate) type Vec3 = [f32; 3];
+pub(crate) use groom::math::single::{cross, dot, sub, V3 as Vec3};
 
-pub(crate) fn dot(a: Vec3, b: Vec3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
+/// Unit `a`, or zero for a vector without direction (a degenerate view).
 pub(crate) fn normalize(a: Vec3) -> Vec3 {
-    let length = dot(a, a).sqrt();
-    if length > 0.0 && length.is_finite() {
-        [a[0] / length, a[1] / length, a[2] / length]
-    } else {
-        [0.0, 0.0, 0.0]
-    }
+    groom::math::single::try_normalize(a).unwrap_or([0.0; 3])
 }
 
 /// Where a point lands in the picture.

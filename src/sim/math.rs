@@ -1,43 +1,12 @@
-//! Small f32 vector and quaternion helpers. Quaternions are `[x, y, z, w]`
+//! The solver's f32 quaternion helpers, on the engine's one vector set
+//! (`groom::math::single`, re-exported here). Quaternions are `[x, y, z, w]`
 //! (Hamilton product), the layout glam and glTF use.
 
-pub type V3 = [f32; 3];
+pub use groom::math::single::{add, cross, dot, is_finite3, length, scale, sub, V3};
+
 pub type Quat = [f32; 4];
 
 pub const IDENTITY: Quat = [0.0, 0.0, 0.0, 1.0];
-
-#[inline(always)]
-pub fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-#[inline(always)]
-pub fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline(always)]
-pub fn scale(a: V3, s: f32) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-#[inline(always)]
-pub fn dot(a: V3, b: V3) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline(always)]
-pub fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline(always)]
-pub fn length(a: V3) -> f32 {
-    dot(a, a).sqrt()
-}
-#[inline(always)]
-pub fn is_finite3(a: V3) -> bool {
-    a[0].is_finite() && a[1].is_finite() && a[2].is_finite()
-}
 
 /// Hamilton product `a * b`.
 #[inline(always)]
