@@ -348,7 +348,11 @@ fn usd_core_file_converts_to_valid_usd() {
 /// strand and vertex counts usd-core composes for them (instance proxies
 /// included). What groombake reads of each (counts and world points) goes to
 /// `.ci/check_usd_fixtures.py`, which compares it with usd-core's reading.
-const COMPOSED_FIXTURES: [(&str, &[u32]); 10] = [
+///
+/// The `.usdc` ones are crate layers usd-core wrote
+/// (`tests/data/usd/make_crate_fixtures.py`): the same arcs in the crate's
+/// encodings, and a crate layer whose payload is a text layer.
+const COMPOSED_FIXTURES: [(&str, &[u32]); 16] = [
     ("reference_internal.usda", &[3, 2, 3, 2]),
     ("payload_main.usda", &[4, 3, 4, 3]),
     ("sublayer_main.usda", &[2, 2]),
@@ -359,6 +363,12 @@ const COMPOSED_FIXTURES: [(&str, &[u32]); 10] = [
     ("constant_widths.usda", &[3, 2]),
     ("color3f.usda", &[2, 3]),
     ("legacy_pointfloat.usda", &[2, 3]),
+    ("reference_internal.usdc", &[3, 2, 3, 2]),
+    ("payload_main.usdc", &[4, 3, 4, 3]),
+    ("crate_payload_text.usdc", &[4, 3, 4, 3]),
+    ("sublayer_main.usdc", &[2, 2]),
+    ("instancing.usdc", &[3, 3, 3]),
+    ("inherits.usdc", &[2, 3, 2]),
 ];
 
 fn usd_fixture(name: &str) -> std::path::PathBuf {
@@ -431,6 +441,18 @@ fn unresolvable_payload_names_the_arc_and_the_file() {
             && message.contains("not_here.usda: No such file"),
         "{message}"
     );
+    // The same from a crate layer (the arc's place is its prim path).
+    let source = usd_fixture("crate_missing_reference.usdc");
+    let message = dir.run_fail(&["convert", source.to_str().unwrap(), "out.usda"], 2);
+    assert!(
+        message.contains("crate_missing_reference.usdc:/Head: references @./not_here.usdc@</Hair>")
+            && message.contains("not_here.usdc: No such file"),
+        "{message}"
+    );
+    assert!(!dir.path("out.usda").exists());
+    let source = usd_fixture("crate_cycle_a.usdc");
+    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    assert!(message.contains("a cycle?"), "{message}");
 }
 
 /// A reference cycle ends with an error, not a hang or a stack overflow.
@@ -459,7 +481,7 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
     let dir = TestDir::new();
     for (name, counts) in COMPOSED_FIXTURES {
         let source = usd_fixture(name);
-        let stem = name.trim_end_matches(".usda");
+        let stem = name.trim_end_matches(".usda").replace('.', "_");
         for ext in ["usda", "usdc"] {
             let out = format!("{stem}.{ext}");
             dir.run_ok(&["convert", source.to_str().unwrap(), &out]);

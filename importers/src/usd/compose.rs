@@ -17,7 +17,7 @@
 use super::{Arc, ArcTarget, Prim, Specifier, Stage};
 use crate::{ImportError, Place};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// Deepest chain of arcs followed (a cycle ends here with an error).
 const MAX_ARC_DEPTH: usize = 64;
@@ -54,9 +54,7 @@ pub(super) fn compose(file: &Path, stage: Stage) -> Result<Stage, ImportError> {
         prims: 0,
         notes: Vec::new(),
     };
-    let simple = stage.sublayers.is_empty()
-        && stage.unfollowed.is_empty()
-        && stage.prims.iter().all(|p| p.arcs.is_empty());
+    let simple = stage.sublayers.is_empty() && stage.prims.iter().all(|p| p.arcs.is_empty());
     if simple {
         return Ok(stage);
     }
@@ -197,16 +195,6 @@ fn count(node: &Node) -> usize {
 impl Composer {
     /// Adds a parsed layer with its sublayers merged in; returns its index.
     fn add_layer(&mut self, file: &Path, stage: Stage, depth: usize) -> Result<usize, ImportError> {
-        if let Some((arc, place)) = stage.unfollowed.first() {
-            return Err(ImportError::malformed(
-                file,
-                place.clone(),
-                format!(
-                    "{arc}: composition arcs of crate (.usdc) layers are not followed; \
-                     write the layer as .usda or flatten it (usdcat --flatten)"
-                ),
-            ));
-        }
         let index = self.layers.len();
         self.by_file.insert(file.to_path_buf(), index);
         self.notes.extend(stage.notes);
@@ -249,12 +237,29 @@ impl Composer {
                 "{arc}: arcs nest deeper than {MAX_ARC_DEPTH} layers (a cycle?)"
             )));
         }
-        let file = from.parent().unwrap_or(Path::new("")).join(asset);
+        // Without `.` components, so that a layer reached as `./a.usda`
+        // from `./b.usda` is the layer already loaded, and errors name it plainly.
+        let file: PathBuf = from
+            .parent()
+            .unwrap_or(Path::new(""))
+            .join(asset)
+            .components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect();
         if let Some(&index) = self.by_file.get(&file) {
             return Ok(index);
         }
-        let bytes = std::fs::read(&file)
-            .map_err(|e| here(format!("{arc}: cannot open {}: {e}", file.display())))?;
+        let cannot_open =
+            |e: std::io::Error| here(format!("{arc}: cannot open {}: {e}", file.display()));
+        // A layer is a regular file: an arc to a device (`/dev/zero`) or a
+        // pipe would never end.
+        if !std::fs::metadata(&file).map_err(cannot_open)?.is_file() {
+            return Err(here(format!(
+                "{arc}: {} is not a regular file",
+                file.display()
+            )));
+        }
+        let bytes = std::fs::read(&file).map_err(cannot_open)?;
         let stage = super::parse_layer(&file, &bytes)?;
         self.add_layer(&file, stage, depth)
     }

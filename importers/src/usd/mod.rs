@@ -5,7 +5,7 @@
 //! every defined `BasisCurves` prim into strands, with each prim's transform
 //! (its `xformOpOrder`, composed through its parents) applied to the points.
 //! [`compose`] first follows sublayers, references, payloads, inherits and
-//! specializes (variants are not selected).
+//! specializes, as either reader gives them (variants are not selected).
 
 mod compose;
 mod crate_reader;
@@ -95,6 +95,18 @@ impl ArcKind {
             "specializes" => ArcKind::Specialize,
             _ => return None,
         })
+    }
+
+    /// Strength within a prim, strongest 0: inherits, then references and
+    /// payloads, then specializes (LIVRPS: local, inherits, variants,
+    /// references, payloads, specializes).
+    pub(crate) fn strength(self) -> u8 {
+        match self {
+            ArcKind::Inherit => 0,
+            ArcKind::Reference => 1,
+            ArcKind::Payload => 2,
+            ArcKind::Specialize => 3,
+        }
     }
 
     pub(crate) fn key(self) -> &'static str {
@@ -203,8 +215,6 @@ pub(crate) struct Stage {
     pub sublayers: Vec<(String, Place)>,
     /// What the reader passed over (variant sets), for the groom's info.
     pub notes: Vec<String>,
-    /// Arcs the reader found but cannot follow (crate files), with where.
-    pub unfollowed: Vec<(String, Place)>,
 }
 
 /// What an element of a USD value type holds.

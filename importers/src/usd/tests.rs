@@ -573,3 +573,76 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let error = error_text(&brackets);
     assert!(error.contains("nested too deeply"), "{error}");
 }
+
+/// A USD fixture of the workspace's `tests/data/usd/`.
+fn usd_fixture(name: &str) -> PathBuf {
+    workspace_data("usd").join(name)
+}
+
+/// The crate copies usd-core wrote of the composed text fixtures (arcs in
+/// the crate's list-op encodings: sublayers, external and internal
+/// references, payloads, inherits, specializes, instancing) compose to the
+/// same strands as the text fixtures.
+#[test]
+fn crate_layers_compose_like_their_text() {
+    for (text, binary) in [
+        ("reference_internal.usda", "reference_internal.usdc"),
+        ("payload_main.usda", "payload_main.usdc"),
+        ("payload_main.usda", "crate_payload_text.usdc"),
+        ("sublayer_main.usda", "sublayer_main.usdc"),
+        ("instancing.usda", "instancing.usdc"),
+        ("inherits.usda", "inherits.usdc"),
+    ] {
+        let expected = read(&usd_fixture(text)).unwrap();
+        let groom = read(&usd_fixture(binary)).unwrap_or_else(|e| panic!("{binary}: {e}"));
+        assert_eq!(
+            groom.strand_vertex_counts, expected.strand_vertex_counts,
+            "{binary}"
+        );
+        assert_eq!(groom.points, expected.points, "{binary}");
+        assert_eq!(
+            groom.provenance.metadata.get(groom::PRIMS_KEY),
+            expected.provenance.metadata.get(groom::PRIMS_KEY),
+            "{binary}: the same composed prim paths"
+        );
+    }
+}
+
+/// Bad arcs in crate layers give the errors the text path gives: the arc
+/// and the missing file, a cycle.
+#[test]
+fn bad_crate_arcs_are_named() {
+    let missing = read(&usd_fixture("crate_missing_reference.usdc"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        missing.contains("crate_missing_reference.usdc:/Head: references @./not_here.usdc@</Hair>")
+            && missing.contains("not_here.usdc: No such file"),
+        "{missing}"
+    );
+    let cycle = read(&usd_fixture("crate_cycle_a.usdc"))
+        .unwrap_err()
+        .to_string();
+    assert!(cycle.contains("(a cycle?)"), "{cycle}");
+}
+
+/// A list op claiming more items than the file holds is refused before
+/// anything is allocated for them.
+#[test]
+fn crate_list_op_counts_are_bounded() {
+    let path = usd_fixture("crate_missing_reference.usdc");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // The reference list op: header byte (prepended items), then the count.
+    let original = read_bytes(&path, &bytes).unwrap_err().to_string();
+    assert!(original.contains("not_here.usdc"), "{original}");
+    let count_at = bytes
+        .windows(9)
+        .position(|w| w[0] == 1 << 5 && w[1..] == 1u64.to_le_bytes())
+        .expect("the prepended reference list");
+    bytes[count_at + 1..count_at + 9].copy_from_slice(&u64::MAX.to_le_bytes());
+    let message = read_bytes(&path, &bytes).unwrap_err().to_string();
+    assert!(
+        message.contains("list items do not fit in the file"),
+        "{message}"
+    );
+}
