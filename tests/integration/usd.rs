@@ -527,16 +527,121 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
     );
 }
 
-/// Time-sampled curve counts that change are refused with the time they
-/// change at (not a mismatch of points and counts), before any simulation.
+/// Time-sampled curve counts that change: `inspect` and `convert` carry
+/// the sequence (one groom per topology), USD keeps it as time-sampled
+/// `curveVertexCounts` and `points` that usd-core reads back, a format that
+/// holds one topology warns (or, with --strict, refuses), and the bake
+/// refuses it before simulating.
 #[test]
-fn time_varying_topology_is_refused_naming_the_time() {
+fn time_varying_topology_is_carried_by_inspect_and_convert() {
     let dir = TestDir::new();
     let source = usd_fixture("time_sampled_counts.usda");
-    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    let source = source.to_str().unwrap();
+    let summary = dir.inspect(source);
+    assert_eq!(
+        summary["topology"],
+        json!([
+            {"from_time": 1.0 / 24.0, "strands": 2, "vertices": 4, "frames": 1},
+            {"from_time": 2.0 / 24.0, "strands": 2, "vertices": 6, "frames": 1},
+        ])
+    );
+    assert_eq!(summary["frames"], 2);
+    let text = String::from_utf8(dir.run_ok(&["inspect", source]).stdout).unwrap();
+    assert!(
+        text.contains("topology    from 0.08333333333333333 s: 2 strands, 6 vertices"),
+        "{text}"
+    );
+
+    // What groombake reads at each time code, for usd-core's comparison.
+    let sequence = importers::read_sequence(std::path::Path::new(source)).unwrap();
+    let samples: Vec<_> = sequence
+        .iter()
+        .flat_map(|groom| {
+            groom.frames.iter().map(|frame| {
+                json!({
+                    "time_code": (frame.time * 24.0).round(),
+                    "counts": groom.strand_vertex_counts,
+                    "points": frame.points,
+                })
+            })
+        })
+        .collect();
+    assert_eq!(samples.len(), 2);
+    if let Some(artifacts) = std::env::var_os("GROOMBAKE_ARTIFACTS") {
+        let fixtures = std::path::PathBuf::from(artifacts).join("usd_fixtures");
+        std::fs::create_dir_all(&fixtures).unwrap();
+        let reading = json!({
+            "source": std::path::Path::new(source).canonicalize().unwrap(),
+            "samples": samples,
+        });
+        std::fs::write(
+            fixtures.join("time_sampled_counts.usda.groombake.json"),
+            serde_json::to_vec(&reading).unwrap(),
+        )
+        .unwrap();
+    }
+
+    for ext in ["usda", "usdc"] {
+        let out = format!("growing.{ext}");
+        let output = dir.run_ok(&["convert", source, &out]);
+        assert!(output.stderr.is_empty(), "{out}: no warning");
+        let back = importers::read_sequence(&dir.path(&out)).unwrap();
+        assert_eq!(back.len(), 2, "{out}: two topologies");
+        for (read, written) in back.iter().zip(&sequence) {
+            assert_eq!(read.strand_vertex_counts, written.strand_vertex_counts);
+            assert_eq!(read.frames, written.frames, "{out}");
+        }
+        hand_to_validators(
+            &dir.path(&out),
+            &format!("usd_time_varying_topology_{ext}"),
+            json!({
+                "curves": 2,
+                "points": 4,
+                "meters_per_unit": 0.01,
+                "time_samples": 2,
+                "start_time_code": 1.0,
+                "end_time_code": 2.0,
+                "topology": [[1.0, 2, 4], [2.0, 2, 6]],
+                "sample_points": [[2.0, 5, [1.0, 2.0, 0.0]]],
+            }),
+        );
+    }
+
+    // A format of one topology: the first is written, with a warning.
+    let output = dir.run_ok(&["convert", source, "growing.abc"]);
+    let stderr = String::from_utf8(output.stderr).unwrap();
+    assert!(
+        stderr.contains("growing.abc: .abc cannot hold curve counts that change over time")
+            && stderr.contains("up to the change at 0.08333333333333333 s"),
+        "{stderr}"
+    );
+    let first = importers::read(&dir.path("growing.abc")).unwrap();
+    assert_eq!(first.vertex_count(), 4);
+    let message = dir.run_fail(&["convert", "--strict", source, "strict.abc"], 2);
+    assert!(
+        message.contains("--strict: strict.abc: .abc cannot hold"),
+        "{message}"
+    );
+    assert!(!dir.path("strict.abc").exists());
+    // --frame picks a frame across the sequence.
+    dir.run_ok(&["convert", source, "second.obj", "--frame", "1"]);
+    assert_eq!(
+        importers::read(&dir.path("second.obj"))
+            .unwrap()
+            .vertex_count(),
+        6
+    );
+
+    // The bake needs one topology: exit 2 naming the time, nothing written.
+    let timeline = format!(
+        "[groom]\nsource = {source:?}\n[[stage]]\nkind = \"settle\"\nduration = 0.1\n[[export]]\npath = \"baked.glb\"\nwhat = \"final\"\n"
+    );
+    std::fs::write(dir.path("bake.toml"), timeline).unwrap();
+    let message = dir.run_fail(&["bake", "bake.toml", "-q"], 2);
     assert!(
         message.contains("time_sampled_counts.usda:13:")
             && message.contains("topology changes at time 2"),
         "{message}"
     );
+    assert!(!dir.path("baked.glb").exists());
 }
