@@ -527,6 +527,43 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
     );
 }
 
+/// The sequence groombake reads from a fixture with time-sampled counts,
+/// whose time codes (24 per second) must be `codes`; handed to
+/// `.ci/check_usd_fixtures.py`, which compares counts and points at each
+/// time code with usd-core's.
+fn sequence_reading(name: &str, codes: &[f64]) -> Vec<Groom> {
+    let source = usd_fixture(name);
+    let sequence = importers::read_sequence(&source).unwrap();
+    let samples: Vec<_> = sequence
+        .iter()
+        .flat_map(|groom| {
+            groom.frames.iter().map(|frame| {
+                json!({
+                    "time_code": frame.time * 24.0,
+                    "counts": groom.strand_vertex_counts,
+                    "points": frame.points,
+                })
+            })
+        })
+        .collect();
+    let read_codes: Vec<f64> = samples
+        .iter()
+        .map(|s| s["time_code"].as_f64().unwrap())
+        .collect();
+    assert_eq!(read_codes, codes, "{name}");
+    if let Some(artifacts) = std::env::var_os("GROOMBAKE_ARTIFACTS") {
+        let fixtures = std::path::PathBuf::from(artifacts).join("usd_fixtures");
+        std::fs::create_dir_all(&fixtures).unwrap();
+        let reading = json!({"source": source.canonicalize().unwrap(), "samples": samples});
+        std::fs::write(
+            fixtures.join(format!("{name}.groombake.json")),
+            serde_json::to_vec(&reading).unwrap(),
+        )
+        .unwrap();
+    }
+    sequence
+}
+
 /// Time-sampled curve counts that change: `inspect` and `convert` carry
 /// the sequence (one groom per topology), USD keeps it as time-sampled
 /// `curveVertexCounts` and `points` that usd-core reads back, a format that
@@ -552,34 +589,12 @@ fn time_varying_topology_is_carried_by_inspect_and_convert() {
         "{text}"
     );
 
-    // What groombake reads at each time code, for usd-core's comparison.
-    let sequence = importers::read_sequence(std::path::Path::new(source)).unwrap();
-    let samples: Vec<_> = sequence
-        .iter()
-        .flat_map(|groom| {
-            groom.frames.iter().map(|frame| {
-                json!({
-                    "time_code": (frame.time * 24.0).round(),
-                    "counts": groom.strand_vertex_counts,
-                    "points": frame.points,
-                })
-            })
-        })
-        .collect();
-    assert_eq!(samples.len(), 2);
-    if let Some(artifacts) = std::env::var_os("GROOMBAKE_ARTIFACTS") {
-        let fixtures = std::path::PathBuf::from(artifacts).join("usd_fixtures");
-        std::fs::create_dir_all(&fixtures).unwrap();
-        let reading = json!({
-            "source": std::path::Path::new(source).canonicalize().unwrap(),
-            "samples": samples,
-        });
-        std::fs::write(
-            fixtures.join("time_sampled_counts.usda.groombake.json"),
-            serde_json::to_vec(&reading).unwrap(),
-        )
-        .unwrap();
-    }
+    let sequence = sequence_reading("time_sampled_counts.usda", &[1.0, 2.0]);
+    // Counts held between their samples, points interpolated where their
+    // lengths agree (as usd-core evaluates them), under a parent transform.
+    let held = sequence_reading("time_sampled_counts_held.usda", &[0.0, 1.0, 2.0, 3.0]);
+    assert_eq!(held.len(), 2);
+    assert_eq!(held[0].frames[1].points, [[0.0, 5.0, 0.0], [0.0, 7.0, 0.0]]);
 
     for ext in ["usda", "usdc"] {
         let out = format!("growing.{ext}");

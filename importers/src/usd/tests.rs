@@ -646,3 +646,38 @@ fn crate_list_op_counts_are_bounded() {
         "{message}"
     );
 }
+
+/// A topology that changes over time is refused by `read` (the bake) with
+/// the time it changes at, and read by `read_sequence` as one groom per
+/// topology: counts held between samples, points interpolated where their
+/// lengths agree, as usd-core evaluates them.
+#[test]
+fn time_varying_topology_reads_as_a_sequence() {
+    let path = usd_fixture("time_sampled_counts_held.usda");
+    let refusal = read(&path).unwrap_err().to_string();
+    assert!(refusal.contains("topology changes at time 3"), "{refusal}");
+    let sequence = read_sequence(&path).unwrap();
+    assert_eq!(sequence.len(), 2);
+    let (first, second) = (&sequence[0], &sequence[1]);
+    assert_eq!(first.strand_vertex_counts, [2]);
+    assert_eq!(second.strand_vertex_counts, [3]);
+    let times: Vec<f64> = first.frames.iter().map(|f| f.time).collect();
+    assert_eq!(times, [0.0, 1.0 / 24.0, 2.0 / 24.0]);
+    // The Groom Xform translates by (0, 5, 0).
+    let points: Vec<_> = first.frames.iter().map(|f| f.points.clone()).collect();
+    assert_eq!(
+        points,
+        [
+            vec![[0.0, 5.0, 0.0], [0.0, 6.0, 0.0]],
+            vec![[0.0, 5.0, 0.0], [0.0, 7.0, 0.0]],
+            vec![[0.0, 5.0, 0.0], [0.0, 8.0, 0.0]],
+        ]
+    );
+    assert_eq!(first.points, points[0], "the rest pose is the first frame");
+    assert_eq!(second.frames.len(), 1);
+    assert_eq!(second.frames[0].time, 3.0 / 24.0);
+    assert_eq!(second.points[2], [0.0, 7.0, 1.0]);
+    // A file of one topology is one groom, as `read` gives it.
+    let one = read_sequence(&usd_fixture("payload_main.usda")).unwrap();
+    assert_eq!(one, vec![read(&usd_fixture("payload_main.usda")).unwrap()]);
+}
