@@ -21,6 +21,8 @@ use std::path::{Component, Path, PathBuf};
 
 /// Deepest chain of arcs followed (a cycle ends here with an error).
 const MAX_ARC_DEPTH: usize = 64;
+/// Largest layer an arc may bring, in bytes.
+const MAX_LAYER_BYTES: u64 = 8 << 30;
 /// Most prims a composed stage may hold.
 const MAX_COMPOSED_PRIMS: usize = 4_000_000;
 
@@ -251,12 +253,21 @@ impl Composer {
         }
         let cannot_open =
             |e: std::io::Error| here(format!("{arc}: cannot open {}: {e}", file.display()));
-        // A layer is a regular file: an arc to a device (`/dev/zero`) or a
-        // pipe would never end.
-        if !std::fs::metadata(&file).map_err(cannot_open)?.is_file() {
+        // A layer is a regular file of bounded size: an arc (which the file
+        // chooses) to a device (`/dev/zero`), a pipe or `/proc/kcore` would
+        // never end or allocate without bound.
+        let metadata = std::fs::metadata(&file).map_err(cannot_open)?;
+        if !metadata.is_file() {
             return Err(here(format!(
                 "{arc}: {} is not a regular file",
                 file.display()
+            )));
+        }
+        if metadata.len() > MAX_LAYER_BYTES {
+            return Err(here(format!(
+                "{arc}: {} is larger than {} GiB",
+                file.display(),
+                MAX_LAYER_BYTES >> 30
             )));
         }
         let bytes = std::fs::read(&file).map_err(cannot_open)?;

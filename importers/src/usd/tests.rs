@@ -681,3 +681,18 @@ fn time_varying_topology_reads_as_a_sequence() {
     let one = read_sequence(&usd_fixture("payload_main.usda")).unwrap();
     assert_eq!(one, vec![read(&usd_fixture("payload_main.usda")).unwrap()]);
 }
+
+/// An arc to a device is refused before anything is read from it.
+#[test]
+fn arcs_to_devices_are_refused() {
+    let text =
+        "#usda 1.0\ndef Xform \"Head\" (\n    prepend references = @/dev/zero@</Hair>\n)\n{\n}\n";
+    let message = read_bytes(Path::new("device.usda"), text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("device.usda:3:")
+            && message.contains("references @/dev/zero@</Hair>: /dev/zero is not a regular file"),
+        "{message}"
+    );
+}
