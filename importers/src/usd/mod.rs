@@ -36,7 +36,12 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
 /// change over time.
 pub fn read_sequence(path: &Path) -> Result<Vec<Groom>, ImportError> {
     let bytes = crate::read_bytes(path)?;
-    let stage = compose::compose(path, parse_layer(path, &bytes)?)?;
+    read_sequence_bytes(path, &bytes)
+}
+
+/// [`read_sequence`] of bytes already in memory; `path` names them in errors.
+pub fn read_sequence_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Groom>, ImportError> {
+    let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     if !topology_is_sampled(&stage) {
         let mut groom = to_groom(path, &stage)?;
         groom.provenance.format = "usd".into();
@@ -59,6 +64,9 @@ fn topology_is_sampled(stage: &Stage) -> bool {
     })
 }
 
+/// Most (time code, prim) pairs a changing topology is evaluated at.
+const MAX_PRIM_EVALUATIONS: usize = 100_000_000;
+
 /// The stage evaluated at each time code where counts or points are
 /// sampled, grouped into runs of one topology: each run is one groom whose
 /// frames are its time codes. Values between samples are held (the last
@@ -76,6 +84,19 @@ fn topology_sequence(path: &Path, stage: &Stage) -> Result<Vec<Groom>, ImportErr
         .collect();
     codes.sort_by(f64::total_cmp);
     codes.dedup();
+    // The stage is evaluated once per time code: bound the work a small
+    // file with many prims and many samples could ask for.
+    if codes.len().saturating_mul(stage.prims.len()) > MAX_PRIM_EVALUATIONS {
+        return Err(ImportError::malformed(
+            path,
+            Place::File,
+            format!(
+                "{} time codes of a changing topology over {} prims are more than {MAX_PRIM_EVALUATIONS} prim evaluations",
+                codes.len(),
+                stage.prims.len()
+            ),
+        ));
+    }
     let codes_per_second = stage
         .time_codes_per_second
         .or(stage.frames_per_second)

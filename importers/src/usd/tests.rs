@@ -696,3 +696,26 @@ fn arcs_to_devices_are_refused() {
         "{message}"
     );
 }
+
+/// Many samples of a changing topology over many prims are refused before
+/// the stage is evaluated at each time code.
+#[test]
+fn changing_topology_work_is_bounded() {
+    let mut text = String::from(
+        "#usda 1.0\ndef BasisCurves \"C\"\n{\n    int[] curveVertexCounts.timeSamples = {\n",
+    );
+    for code in 0..10_001 {
+        text.push_str(&format!("        {code}: [{}],\n", 2 + code % 2));
+    }
+    text.push_str("    }\n}\n");
+    for prim in 0..10_001 {
+        text.push_str(&format!("def \"P{prim}\"\n{{\n}}\n"));
+    }
+    let message = read_sequence_bytes(Path::new("many.usda"), text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("10001 time codes of a changing topology over 10002 prims"),
+        "{message}"
+    );
+}
