@@ -12,7 +12,11 @@ computes, the time-code range, and the expectations the test wrote beside
 the file in `<file>.expect.json` (keys: curves, points, prims, first_point,
 meters_per_unit, up_axis, basis, time_samples, start_time_code,
 end_time_code, time_codes_per_second, widths, primvars, and sample_points:
-`[time code, point index, [x, y, z]]` items checked in the first curves prim).
+`[time code, point index, [x, y, z]]` items checked in the first curves prim,
+and topology: `[time code, curves, points]` items for a file whose
+curveVertexCounts are time samples). A file with time-sampled counts is
+checked at its first time sample where others are checked at the default
+time, and its counts must fit its points at every time sample.
 Every file must also pass all of usd-core's registered validators
 (`UsdValidation.ValidationRegistry().GetOrLoadAllValidators()`) with no
 error. Exits 1 on any failure or when DIR holds no USD file.
@@ -34,11 +38,10 @@ def close(a, b, tolerance=1e-5):
         math.isclose(x, y, rel_tol=tolerance, abs_tol=tolerance) for x, y in zip(a, b))
 
 
-def fits(curves, size, interpolation):
-    """Whether `size` values fit `interpolation` on these curves. For linear
-    curves vertex and varying have the same size, so the one usd-core's
-    ComputeInterpolationForSize names first may be either."""
-    time = Usd.TimeCode.Default()
+def fits(curves, size, interpolation, time=Usd.TimeCode.Default()):
+    """Whether `size` values fit `interpolation` on these curves at `time`.
+    For linear curves vertex and varying have the same size, so the one
+    usd-core's ComputeInterpolationForSize names first may be either."""
     if not curves.ComputeInterpolationForSize(size, time):
         return False
     expected = {
@@ -112,11 +115,18 @@ def check_file(path):
     total_curves = total_points = 0
     first_point = None
     all_samples = None
+    topology = []
     for curves in curves_prims:
         prim_path = curves.GetPath()
-        counts = curves.GetCurveVertexCountsAttr().Get()
+        counts_attribute = curves.GetCurveVertexCountsAttr()
+        # Time-sampled counts (a topology that changes) have no default:
+        # the first sample stands for it.
+        count_times = counts_attribute.GetTimeSamples()
+        rest = Usd.TimeCode(count_times[0]) if counts_attribute.Get() is None and count_times \
+            else Usd.TimeCode.Default()
+        counts = counts_attribute.Get(rest)
         points_attribute = curves.GetPointsAttr()
-        points = points_attribute.Get()
+        points = points_attribute.Get(rest)
         if counts is None or points is None:
             fail(f"{prim_path}: no curveVertexCounts or points")
             continue
@@ -135,12 +145,21 @@ def check_file(path):
             samples = {}
             for t in times:
                 sample = points_attribute.Get(t)
-                if len(sample) != len(points):
-                    fail(f"{prim_path}: {len(sample)} points at time {t}, {len(points)} at rest")
+                counts_then = counts_attribute.Get(t) or []
+                if len(sample) != sum(counts_then):
+                    fail(f"{prim_path}: {len(sample)} points at time {t}, "
+                         f"counts add up to {sum(counts_then)}")
+                if count_times:
+                    topology.append([t, len(counts_then), len(sample)])
+                    for name, values in (("widths", curves.GetWidthsAttr().Get(t)),):
+                        interpolation = curves.GetWidthsInterpolation()
+                        if values is not None and not fits(curves, len(values), interpolation,
+                                                           Usd.TimeCode(t)):
+                            fail(f"{prim_path}: {len(values)} {name} do not fit at time {t}")
                 samples[t] = [world.Transform(Gf.Vec3d(p)) for p in sample]
             all_samples = all_samples or samples
 
-        checked_times = [Usd.TimeCode.Default()] + [Usd.TimeCode(t) for t in times]
+        checked_times = [rest] + [Usd.TimeCode(t) for t in times]
         for time in checked_times:
             authored = curves.GetExtentAttr().Get(time)
             computed = UsdGeom.Boundable.ComputeExtentFromPlugins(curves, time)
@@ -154,10 +173,10 @@ def check_file(path):
         if "basis" in expect and basis != expect["basis"]:
             fail(f"{prim_path}: basis {basis} != {expect['basis']}")
 
-        widths = curves.GetWidthsAttr().Get()
+        widths = curves.GetWidthsAttr().Get(rest)
         if widths is not None:
             interpolation = curves.GetWidthsInterpolation()
-            if not fits(curves, len(widths), interpolation):
+            if not fits(curves, len(widths), interpolation, rest):
                 fail(f"{prim_path}: {len(widths)} widths do not fit {interpolation} interpolation")
             if "widths" in expect and interpolation != expect["widths"]:
                 fail(f"{prim_path}: widths interpolation {interpolation} != {expect['widths']}")
@@ -167,9 +186,9 @@ def check_file(path):
         primvars = {pv.GetPrimvarName(): pv for pv in UsdGeom.PrimvarsAPI(curves).GetPrimvars()
                     if pv.HasAuthoredValue()}
         for name, primvar in primvars.items():
-            values = primvar.ComputeFlattened()
+            values = primvar.ComputeFlattened(rest)
             size = len(values) // max(primvar.GetElementSize(), 1)
-            if not fits(curves, size, primvar.GetInterpolation()):
+            if not fits(curves, size, primvar.GetInterpolation(), rest):
                 fail(f"{prim_path}: primvar {name} has {size} values, "
                      f"not a {primvar.GetInterpolation()} size")
         for name, interpolation in expect.get("primvars", {}).items():
@@ -204,6 +223,10 @@ def check_file(path):
         fail(f"{total_points} points, expected {expect['points']}")
     if "first_point" in expect and (first_point is None or not close(first_point, expect["first_point"])):
         fail(f"first point {first_point} != {expect['first_point']}")
+    if "topology" in expect and not all(
+            len(a) == len(b) and close(a, b, 1e-9) for a, b in zip(topology, expect["topology"])) \
+            or len(topology) != len(expect.get("topology", topology)):
+        fail(f"topology {topology}, expected {expect['topology']}")
     sample_count = len(all_samples or {})
     if "time_samples" in expect and sample_count != expect["time_samples"]:
         fail(f"{sample_count} time samples, expected {expect['time_samples']}")

@@ -15,7 +15,7 @@ seed() { # target files...
   return 0
 }
 shopt -s nullglob
-data=("$repo"/tests/data/* "$repo"/importers/tests/data/* "$repo"/samples/*)
+data=("$repo"/tests/data/* "$repo"/tests/data/usd/* "$repo"/importers/tests/data/* "$repo"/samples/*)
 converted=$(mktemp -d)
 trap 'rm -rf "$converted"' EXIT
 if [ -x "$groombake" ]; then

@@ -162,6 +162,29 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     }
 }
 
+/// Whether the format at `path` holds curve counts that change over time
+/// (USD, as time-sampled `curveVertexCounts`).
+pub fn holds_topology_changes(path: &Path) -> bool {
+    matches!(extension_of(path).as_str(), "usda" | "usdc" | "usd")
+}
+
+/// Writes grooms that follow each other in time with different topologies
+/// (`importers::read_sequence`) to a format that holds topology changes
+/// ([`holds_topology_changes`]); other formats are refused.
+pub fn write_sequence(path: &Path, grooms: &[Groom]) -> Result<(), ExportError> {
+    for groom in grooms {
+        check_exportable(path, groom)?;
+    }
+    match extension_of(path).as_str() {
+        "usda" => usd::write_sequence(path, grooms, usd::Encoding::Text),
+        "usdc" | "usd" => usd::write_sequence(path, grooms, usd::Encoding::Crate),
+        _ => Err(ExportError::Unsupported {
+            file: path.to_path_buf(),
+            message: "this format cannot hold curve counts that change over time".into(),
+        }),
+    }
+}
+
 /// Starts an animated export of `groom`'s topology and attributes.
 pub fn animated(
     path: &Path,

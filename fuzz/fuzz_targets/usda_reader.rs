@@ -10,4 +10,6 @@ fuzz_target!(|data: &[u8]| {
     let mut bytes = b"#usda ".to_vec();
     bytes.extend_from_slice(data.strip_prefix(b"#usda ").unwrap_or(data));
     let _ = importers::usd::read_bytes(Path::new("fuzz.usda"), &bytes);
+    // The sequence reader (inspect, convert) evaluates changing topologies.
+    let _ = importers::usd::read_sequence_bytes(Path::new("fuzz.usda"), &bytes);
 });

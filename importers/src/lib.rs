@@ -149,6 +149,26 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
     Ok(groom)
 }
 
+/// Reads a groom file as a sequence of grooms, one per stretch of time
+/// with one topology (strand and point counts), in time order; each has the
+/// frames of its stretch. Every file is one groom, except a USD file whose
+/// `curveVertexCounts` change over time, which [`read`] refuses (`topology
+/// changes at time T`): `inspect` and `convert` carry that sequence.
+pub fn read_sequence(path: &Path) -> Result<Vec<Groom>, ImportError> {
+    if !matches!(extension_of(path).as_str(), "usda" | "usdc" | "usd") {
+        return Ok(vec![read(path)?]);
+    }
+    let mut grooms = usd::read_sequence(path)?;
+    for groom in &mut grooms {
+        if groom.strand_count() == 0 {
+            refuse_mesh(path)?;
+        }
+        groom.provenance.source = Some(path.to_path_buf());
+        groom.provenance.units_source = "file".into();
+    }
+    Ok(grooms)
+}
+
 /// A file with no curves that holds a triangle mesh (a head, a pillow) was
 /// given where hair is expected: an error saying so, rather than an empty
 /// groom that converts and bakes to nothing.

@@ -91,9 +91,37 @@ fn units_rule(source: &str) -> String {
     }
 }
 
+/// Each stretch of time with one topology: from when, strands, vertices
+/// and frames (one entry for a file whose topology does not change).
+fn topology(grooms: &[Groom]) -> Vec<serde_json::Value> {
+    grooms
+        .iter()
+        .map(|g| {
+            json!({
+                "from_time": g.frames.first().map(|f| f.time),
+                "strands": g.strand_count(),
+                "vertices": g.vertex_count(),
+                "frames": g.frames.len(),
+            })
+        })
+        .collect()
+}
+
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    let groom = super::read_groom(&args.file)?;
-    let summary = summary(&groom);
+    let grooms = super::read_sequence(&args.file)?;
+    let groom = &grooms[0];
+    let mut summary = summary(groom);
+    summary["topology"] = json!(topology(&grooms));
+    if grooms.len() > 1 {
+        // Frames of the whole sequence; the other facts are of the first
+        // topology.
+        let times: Vec<f64> = grooms
+            .iter()
+            .flat_map(|g| g.frames.iter().map(|f| f.time))
+            .collect();
+        summary["frames"] = json!(times.len());
+        summary["frame_times"] = json!(times);
+    }
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer_pretty(&mut out, &summary)?;
@@ -115,11 +143,25 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         units_rule(&groom.provenance.units_source)
     )?;
     writeln!(out, "basis       {}", groom.basis.name())?;
-    writeln!(out, "frames      {}", groom.frames.len())?;
-    if let (Some(first), Some(last)) = (groom.frames.first(), groom.frames.last()) {
+    writeln!(out, "frames      {}", summary["frames"])?;
+    let first = grooms.first().and_then(|g| g.frames.first());
+    let last = grooms.last().and_then(|g| g.frames.last());
+    if let (Some(first), Some(last)) = (first, last) {
         writeln!(out, "time        {} .. {} s", first.time, last.time)?;
     }
-    for (path, strands) in prims_of(&groom) {
+    if grooms.len() > 1 {
+        for g in &grooms {
+            writeln!(
+                out,
+                "topology    from {} s: {} strands, {} vertices ({} frames)",
+                g.frames.first().map_or(0.0, |f| f.time),
+                g.strand_count(),
+                g.vertex_count(),
+                g.frames.len()
+            )?;
+        }
+    }
+    for (path, strands) in prims_of(groom) {
         writeln!(out, "prim        {path} ({strands} strands)")?;
     }
     for a in &groom.attributes {

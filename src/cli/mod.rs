@@ -200,6 +200,18 @@ pub fn check_output_path(path: &std::path::Path) -> anyhow::Result<()> {
         .map_err(|message| BadInput(format!("{}: {message}", path.display())).into())
 }
 
+/// Reads a groom file as a sequence of grooms of one topology each
+/// (`importers::read_sequence`), refusing one with fatal problems.
+pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>> {
+    let grooms = importers::read_sequence(path)?;
+    for groom in &grooms {
+        if let Some(problem) = groom.first_fatal_problem() {
+            return Err(BadInput(format!("{}: {problem}", path.display())).into());
+        }
+    }
+    Ok(grooms)
+}
+
 /// Reads a groom file and refuses one with fatal problems, naming the first.
 pub fn read_groom(path: &std::path::Path) -> anyhow::Result<groom::Groom> {
     let groom = importers::read(path)?;

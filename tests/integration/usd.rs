@@ -348,7 +348,11 @@ fn usd_core_file_converts_to_valid_usd() {
 /// strand and vertex counts usd-core composes for them (instance proxies
 /// included). What groombake reads of each (counts and world points) goes to
 /// `.ci/check_usd_fixtures.py`, which compares it with usd-core's reading.
-const COMPOSED_FIXTURES: [(&str, &[u32]); 10] = [
+///
+/// The `.usdc` ones are crate layers usd-core wrote
+/// (`tests/data/usd/make_crate_fixtures.py`): the same arcs in the crate's
+/// encodings, and a crate layer whose payload is a text layer.
+const COMPOSED_FIXTURES: [(&str, &[u32]); 16] = [
     ("reference_internal.usda", &[3, 2, 3, 2]),
     ("payload_main.usda", &[4, 3, 4, 3]),
     ("sublayer_main.usda", &[2, 2]),
@@ -359,6 +363,12 @@ const COMPOSED_FIXTURES: [(&str, &[u32]); 10] = [
     ("constant_widths.usda", &[3, 2]),
     ("color3f.usda", &[2, 3]),
     ("legacy_pointfloat.usda", &[2, 3]),
+    ("reference_internal.usdc", &[3, 2, 3, 2]),
+    ("payload_main.usdc", &[4, 3, 4, 3]),
+    ("crate_payload_text.usdc", &[4, 3, 4, 3]),
+    ("sublayer_main.usdc", &[2, 2]),
+    ("instancing.usdc", &[3, 3, 3]),
+    ("inherits.usdc", &[2, 3, 2]),
 ];
 
 fn usd_fixture(name: &str) -> std::path::PathBuf {
@@ -431,6 +441,18 @@ fn unresolvable_payload_names_the_arc_and_the_file() {
             && message.contains("not_here.usda: No such file"),
         "{message}"
     );
+    // The same from a crate layer (the arc's place is its prim path).
+    let source = usd_fixture("crate_missing_reference.usdc");
+    let message = dir.run_fail(&["convert", source.to_str().unwrap(), "out.usda"], 2);
+    assert!(
+        message.contains("crate_missing_reference.usdc:/Head: references @./not_here.usdc@</Hair>")
+            && message.contains("not_here.usdc: No such file"),
+        "{message}"
+    );
+    assert!(!dir.path("out.usda").exists());
+    let source = usd_fixture("crate_cycle_a.usdc");
+    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    assert!(message.contains("a cycle?"), "{message}");
 }
 
 /// A reference cycle ends with an error, not a hang or a stack overflow.
@@ -459,7 +481,7 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
     let dir = TestDir::new();
     for (name, counts) in COMPOSED_FIXTURES {
         let source = usd_fixture(name);
-        let stem = name.trim_end_matches(".usda");
+        let stem = name.trim_end_matches(".usda").replace('.', "_");
         for ext in ["usda", "usdc"] {
             let out = format!("{stem}.{ext}");
             dir.run_ok(&["convert", source.to_str().unwrap(), &out]);
@@ -505,16 +527,136 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
     );
 }
 
-/// Time-sampled curve counts that change are refused with the time they
-/// change at (not a mismatch of points and counts), before any simulation.
+/// The sequence groombake reads from a fixture with time-sampled counts,
+/// whose time codes (24 per second) must be `codes`; handed to
+/// `.ci/check_usd_fixtures.py`, which compares counts and points at each
+/// time code with usd-core's.
+fn sequence_reading(name: &str, codes: &[f64]) -> Vec<Groom> {
+    let source = usd_fixture(name);
+    let sequence = importers::read_sequence(&source).unwrap();
+    let samples: Vec<_> = sequence
+        .iter()
+        .flat_map(|groom| {
+            groom.frames.iter().map(|frame| {
+                json!({
+                    "time_code": frame.time * 24.0,
+                    "counts": groom.strand_vertex_counts,
+                    "points": frame.points,
+                })
+            })
+        })
+        .collect();
+    let read_codes: Vec<f64> = samples
+        .iter()
+        .map(|s| s["time_code"].as_f64().unwrap())
+        .collect();
+    assert_eq!(read_codes, codes, "{name}");
+    if let Some(artifacts) = std::env::var_os("GROOMBAKE_ARTIFACTS") {
+        let fixtures = std::path::PathBuf::from(artifacts).join("usd_fixtures");
+        std::fs::create_dir_all(&fixtures).unwrap();
+        let reading = json!({"source": source.canonicalize().unwrap(), "samples": samples});
+        std::fs::write(
+            fixtures.join(format!("{name}.groombake.json")),
+            serde_json::to_vec(&reading).unwrap(),
+        )
+        .unwrap();
+    }
+    sequence
+}
+
+/// Time-sampled curve counts that change: `inspect` and `convert` carry
+/// the sequence (one groom per topology), USD keeps it as time-sampled
+/// `curveVertexCounts` and `points` that usd-core reads back, a format that
+/// holds one topology warns (or, with --strict, refuses), and the bake
+/// refuses it before simulating.
 #[test]
-fn time_varying_topology_is_refused_naming_the_time() {
+fn time_varying_topology_is_carried_by_inspect_and_convert() {
     let dir = TestDir::new();
     let source = usd_fixture("time_sampled_counts.usda");
-    let message = dir.run_fail(&["inspect", source.to_str().unwrap()], 2);
+    let source = source.to_str().unwrap();
+    let summary = dir.inspect(source);
+    assert_eq!(
+        summary["topology"],
+        json!([
+            {"from_time": 1.0 / 24.0, "strands": 2, "vertices": 4, "frames": 1},
+            {"from_time": 2.0 / 24.0, "strands": 2, "vertices": 6, "frames": 1},
+        ])
+    );
+    assert_eq!(summary["frames"], 2);
+    let text = String::from_utf8(dir.run_ok(&["inspect", source]).stdout).unwrap();
+    assert!(
+        text.contains("topology    from 0.08333333333333333 s: 2 strands, 6 vertices"),
+        "{text}"
+    );
+
+    let sequence = sequence_reading("time_sampled_counts.usda", &[1.0, 2.0]);
+    // Counts held between their samples, points interpolated where their
+    // lengths agree (as usd-core evaluates them), under a parent transform.
+    let held = sequence_reading("time_sampled_counts_held.usda", &[0.0, 1.0, 2.0, 3.0]);
+    assert_eq!(held.len(), 2);
+    assert_eq!(held[0].frames[1].points, [[0.0, 5.0, 0.0], [0.0, 7.0, 0.0]]);
+
+    for ext in ["usda", "usdc"] {
+        let out = format!("growing.{ext}");
+        let output = dir.run_ok(&["convert", source, &out]);
+        assert!(output.stderr.is_empty(), "{out}: no warning");
+        let back = importers::read_sequence(&dir.path(&out)).unwrap();
+        assert_eq!(back.len(), 2, "{out}: two topologies");
+        for (read, written) in back.iter().zip(&sequence) {
+            assert_eq!(read.strand_vertex_counts, written.strand_vertex_counts);
+            assert_eq!(read.frames, written.frames, "{out}");
+        }
+        hand_to_validators(
+            &dir.path(&out),
+            &format!("usd_time_varying_topology_{ext}"),
+            json!({
+                "curves": 2,
+                "points": 4,
+                "meters_per_unit": 0.01,
+                "time_samples": 2,
+                "start_time_code": 1.0,
+                "end_time_code": 2.0,
+                "topology": [[1.0, 2, 4], [2.0, 2, 6]],
+                "sample_points": [[2.0, 5, [1.0, 2.0, 0.0]]],
+            }),
+        );
+    }
+
+    // A format of one topology: the first is written, with a warning.
+    let output = dir.run_ok(&["convert", source, "growing.abc"]);
+    let stderr = String::from_utf8(output.stderr).unwrap();
+    assert!(
+        stderr.contains("growing.abc: .abc cannot hold curve counts that change over time")
+            && stderr.contains("up to the change at 0.08333333333333333 s"),
+        "{stderr}"
+    );
+    let first = importers::read(&dir.path("growing.abc")).unwrap();
+    assert_eq!(first.vertex_count(), 4);
+    let message = dir.run_fail(&["convert", "--strict", source, "strict.abc"], 2);
+    assert!(
+        message.contains("--strict: strict.abc: .abc cannot hold"),
+        "{message}"
+    );
+    assert!(!dir.path("strict.abc").exists());
+    // --frame picks a frame across the sequence.
+    dir.run_ok(&["convert", source, "second.obj", "--frame", "1"]);
+    assert_eq!(
+        importers::read(&dir.path("second.obj"))
+            .unwrap()
+            .vertex_count(),
+        6
+    );
+
+    // The bake needs one topology: exit 2 naming the time, nothing written.
+    let timeline = format!(
+        "[groom]\nsource = {source:?}\n[[stage]]\nkind = \"settle\"\nduration = 0.1\n[[export]]\npath = \"baked.glb\"\nwhat = \"final\"\n"
+    );
+    std::fs::write(dir.path("bake.toml"), timeline).unwrap();
+    let message = dir.run_fail(&["bake", "bake.toml", "-q"], 2);
     assert!(
         message.contains("time_sampled_counts.usda:13:")
             && message.contains("topology changes at time 2"),
         "{message}"
     );
+    assert!(!dir.path("baked.glb").exists());
 }

@@ -66,17 +66,36 @@ fn inlined(type_id: u8, payload: u64) -> u64 {
     value_rep(type_id, false, true, payload)
 }
 
+/// Writes a static scene, or one whose prims hold time-sampled properties
+/// ([`CurvesPrim::sampled`](super::CurvesPrim)).
 pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), ExportError> {
-    let writer = CrateWriter::create(path, scene)?;
-    writer.finish(scene, None)
+    let mut writer = CrateWriter::create(path, scene)?;
+    if scene.codes.is_empty() {
+        return writer.finish(scene, None);
+    }
+    let mut samples = Samples {
+        times: scene.codes.clone(),
+        reps: BTreeMap::new(),
+    };
+    for (index, prim) in scene.prims.iter().enumerate() {
+        for (name, values) in &prim.sampled {
+            let mut reps = Vec::with_capacity(values.len());
+            for value in values {
+                if let Some(rep) = writer.write_value(value)? {
+                    reps.push(rep);
+                }
+            }
+            samples.reps.insert((index, name.clone()), reps);
+        }
+    }
+    writer.finish(scene, Some(samples))
 }
 
-/// The time samples of `points` and `extent`: per curves prim, one rep
-/// of each per frame.
+/// Time samples: one rep per time of each sampled property, by prim index
+/// and property name (`points` and `extent` of an animated export).
 struct Samples {
     times: Vec<f64>,
-    points: Vec<Vec<u64>>,
-    extents: Vec<Vec<u64>>,
+    reps: BTreeMap<(usize, String), Vec<u64>>,
 }
 
 /// The open file plus the reps of the static property values.
@@ -106,31 +125,39 @@ impl CrateWriter {
             .prims
             .iter()
             .enumerate()
-            .flat_map(|(k, p)| p.properties.iter().map(move |q| (k, q)))
+            .flat_map(|(k, p)| p.properties.iter().map(move |q| (k, p, q)))
+            .filter(|(_, p, q)| p.samples_of(&q.name).is_none())
+            .map(|(k, _, q)| (k, q))
         {
-            let rep = match &property.value {
-                // Tokens are inlined once their index is known, in `finish`.
-                PropertyValue::Token(_) => continue,
-                PropertyValue::Ints(v) => writer.write_array(
-                    type_id::INT,
-                    v.len(),
-                    v.iter().flat_map(|x| x.to_le_bytes()),
-                )?,
-                PropertyValue::Floats(v) => writer.write_array(
-                    type_id::FLOAT,
-                    v.len(),
-                    v.iter().flat_map(|x| x.to_le_bytes()),
-                )?,
-                PropertyValue::Float2s(v) => writer.write_array(
-                    type_id::VEC2F,
-                    v.len(),
-                    v.iter().flatten().flat_map(|x| x.to_le_bytes()),
-                )?,
-                PropertyValue::Float3s(v) => writer.write_float3s(v)?,
-            };
-            writer.defaults.insert((prim, property.name.clone()), rep);
+            // Tokens are inlined once their index is known, in `finish`.
+            if let Some(rep) = writer.write_value(&property.value)? {
+                writer.defaults.insert((prim, property.name.clone()), rep);
+            }
         }
         Ok(writer)
+    }
+
+    /// Writes an array value; `None` for tokens (inlined in `finish`).
+    fn write_value(&mut self, value: &PropertyValue) -> Result<Option<u64>, ExportError> {
+        Ok(Some(match value {
+            PropertyValue::Token(_) => return Ok(None),
+            PropertyValue::Ints(v) => self.write_array(
+                type_id::INT,
+                v.len(),
+                v.iter().flat_map(|x| x.to_le_bytes()),
+            )?,
+            PropertyValue::Floats(v) => self.write_array(
+                type_id::FLOAT,
+                v.len(),
+                v.iter().flat_map(|x| x.to_le_bytes()),
+            )?,
+            PropertyValue::Float2s(v) => self.write_array(
+                type_id::VEC2F,
+                v.len(),
+                v.iter().flatten().flat_map(|x| x.to_le_bytes()),
+            )?,
+            PropertyValue::Float3s(v) => self.write_float3s(v)?,
+        }))
     }
 
     fn io_error(&self, error: io::Error) -> ExportError {
@@ -211,19 +238,16 @@ impl CrateWriter {
         let mut strings: Vec<u32> = Vec::new();
 
         // Time samples: one shared times vector.
-        let mut sampled: BTreeMap<(usize, &str), u64> = BTreeMap::new();
+        let mut sampled: BTreeMap<(usize, String), u64> = BTreeMap::new();
         let mut time_range = None;
         if let Some(samples) = &samples {
             let mut bytes = (samples.times.len() as u64).to_le_bytes().to_vec();
             bytes.extend(samples.times.iter().flat_map(|t| t.to_le_bytes()));
             let start = self.write_bytes(&bytes)?;
             let times_rep = value_rep(type_id::DOUBLE_VECTOR, false, false, start);
-            for (prim, (points, extents)) in samples.points.iter().zip(&samples.extents).enumerate()
-            {
-                let points = self.write_time_samples(times_rep, points)?;
-                let extents = self.write_time_samples(times_rep, extents)?;
-                sampled.insert((prim, "points"), points);
-                sampled.insert((prim, "extent"), extents);
+            for (key, reps) in &samples.reps {
+                let rep = self.write_time_samples(times_rep, reps)?;
+                sampled.insert(key.clone(), rep);
             }
             time_range = samples.times.first().zip(samples.times.last());
         }
@@ -297,7 +321,7 @@ impl CrateWriter {
                 if let Some(default) = default {
                     fields.push(("default", default));
                 }
-                if let Some(&rep) = sampled.get(&(index, property.name.as_str())) {
+                if let Some(&rep) = sampled.get(&(index, property.name.clone())) {
                     fields.push(("timeSamples", rep));
                 }
                 layer.spec(path, SPEC_ATTRIBUTE, &fields);
@@ -615,8 +639,14 @@ impl AnimatedCrate {
             scene,
             samples: Samples {
                 times: Vec::new(),
-                points: vec![Vec::new(); prims],
-                extents: vec![Vec::new(); prims],
+                reps: (0..prims)
+                    .flat_map(|k| {
+                        [
+                            ((k, "points".into()), Vec::new()),
+                            ((k, "extent".into()), Vec::new()),
+                        ]
+                    })
+                    .collect(),
             },
         })
     }
@@ -637,8 +667,11 @@ impl FrameWriter for AnimatedCrate {
             let points = prim.points_of(&frame.points);
             let points_rep = self.writer.write_float3s(&points)?;
             let extent_rep = self.writer.write_float3s(&prim.extent(&points))?;
-            self.samples.points[index].push(points_rep);
-            self.samples.extents[index].push(extent_rep);
+            for (name, rep) in [("points", points_rep), ("extent", extent_rep)] {
+                if let Some(reps) = self.samples.reps.get_mut(&(index, name.to_string())) {
+                    reps.push(rep);
+                }
+            }
         }
         self.samples.times.push(code);
         Ok(())

@@ -164,6 +164,101 @@ pub fn write(path: &Path, groom: &Groom, encoding: Encoding) -> Result<(), Expor
     writer.finish()
 }
 
+/// Writes grooms that follow each other in time with different topologies
+/// (`importers::read_sequence`), in time order: one curves prim whose
+/// `curveVertexCounts`, `points`, `extent`, `widths` and primvars are time
+/// samples at every frame of every groom (a groom without frames is one
+/// sample at its time 0). The grooms must have the same attributes and one
+/// curve type and wrap: a prim cannot split into several over time.
+pub fn write_sequence(
+    path: &Path,
+    grooms: &[Groom],
+    encoding: Encoding,
+) -> Result<(), ExportError> {
+    let invalid = |message: String| ExportError::Invalid {
+        file: path.to_path_buf(),
+        message,
+    };
+    let Some(first) = grooms.first() else {
+        return Err(invalid("a sequence needs at least one groom".into()));
+    };
+    let mut scene = CurvesScene::new(path, first, Some(DEFAULT_FPS))?;
+    if scene.prims.len() != 1 {
+        return Err(ExportError::Unsupported {
+            file: path.to_path_buf(),
+            message: "curve counts that change over time are written as one curves prim; \
+                      this groom needs several (curve types, wraps or guide and render strands)"
+                .into(),
+        });
+    }
+    let mut sampled: Vec<(String, Vec<PropertyValue>)> = scene.prims[0]
+        .properties
+        .iter()
+        .filter(|p| !matches!(p.value, PropertyValue::Token(_)))
+        .map(|p| (p.name.clone(), Vec::new()))
+        .collect();
+    let mut codes: Vec<f64> = Vec::new();
+    for groom in grooms {
+        let prim = curves_prim(
+            path,
+            groom,
+            CURVES_PRIM.to_string(),
+            std::iter::once(0..groom.points.len()).collect(),
+        )?;
+        let shape = |p: &CurvesPrim| -> Vec<(String, &'static str)> {
+            p.properties
+                .iter()
+                .map(|q| (q.name.clone(), q.type_name))
+                .collect()
+        };
+        if shape(&prim) != shape(&scene.prims[0]) {
+            return Err(invalid(
+                "the grooms of a sequence must have the same attributes".into(),
+            ));
+        }
+        let rest = [Frame {
+            time: 0.0,
+            points: groom.points.clone(),
+        }];
+        let frames = if groom.frames.is_empty() {
+            &rest[..]
+        } else {
+            &groom.frames[..]
+        };
+        for frame in frames {
+            scene.check_frame_of(path, frame, groom.points.len())?;
+            let code = time_code(frame.time, DEFAULT_FPS);
+            if codes.last().is_some_and(|&last| code <= last) {
+                return Err(invalid(format!(
+                    "frame time codes must increase (time code {code})"
+                )));
+            }
+            codes.push(code);
+            for (name, values) in &mut sampled {
+                let value = match name.as_str() {
+                    "points" => PropertyValue::Float3s(frame.points.clone()),
+                    "extent" => PropertyValue::Float3s(
+                        extent_of(&frame.points, prim.extent_padding).to_vec(),
+                    ),
+                    _ => prim
+                        .properties
+                        .iter()
+                        .find(|p| &p.name == name)
+                        .map(|p| p.value.clone())
+                        .ok_or_else(|| invalid(format!("{name} is missing")))?,
+                };
+                values.push(value);
+            }
+        }
+    }
+    scene.codes = codes;
+    scene.prims[0].sampled = sampled;
+    match encoding {
+        Encoding::Text => usda::write_static(path, &scene),
+        Encoding::Crate => crate_writer::write_static(path, &scene),
+    }
+}
+
 /// Starts an animated export; frames are streamed to the file.
 pub fn animated(
     path: &Path,
@@ -224,9 +319,21 @@ pub(crate) struct CurvesPrim {
     /// Half the largest width: the extent grows by it, as USD's own
     /// `UsdGeomCurves::ComputeExtent` does.
     pub extent_padding: f32,
+    /// Properties written as time samples only (no default), with one
+    /// value per [`CurvesScene::codes`] entry: a groom sequence whose
+    /// topology changes over time ([`write_sequence`]).
+    pub sampled: Vec<(String, Vec<PropertyValue>)>,
 }
 
 impl CurvesPrim {
+    /// The time samples of a property written as samples only.
+    pub fn samples_of(&self, name: &str) -> Option<&[PropertyValue]> {
+        self.sampled
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, values)| values.as_slice())
+    }
+
     /// This prim's points of a pose of the whole groom.
     pub fn points_of<'a>(&self, points: &'a [[f32; 3]]) -> Cow<'a, [[f32; 3]]> {
         match &self.vertex_ranges[..] {
@@ -257,6 +364,9 @@ pub(crate) struct CurvesScene {
     pub prims: Vec<CurvesPrim>,
     /// Vertex count of the groom (every frame must have as many points).
     pub vertex_count: usize,
+    /// Time codes of the prims' `sampled` properties (empty unless written
+    /// by [`write_sequence`]).
+    pub codes: Vec<f64>,
 }
 
 impl CurvesScene {
@@ -302,6 +412,7 @@ impl CurvesScene {
             timing: fps.map(|fps| Timing { fps }),
             prims,
             vertex_count: groom.points.len(),
+            codes: Vec::new(),
         })
     }
 
@@ -322,14 +433,24 @@ impl CurvesScene {
 
     /// Checks a streamed frame against the groom's topology.
     pub fn check_frame(&self, path: &Path, frame: &Frame) -> Result<(), ExportError> {
-        if frame.points.len() != self.vertex_count {
+        self.check_frame_of(path, frame, self.vertex_count)
+    }
+
+    /// Checks a frame of a groom of `vertex_count` points.
+    fn check_frame_of(
+        &self,
+        path: &Path,
+        frame: &Frame,
+        vertex_count: usize,
+    ) -> Result<(), ExportError> {
+        if frame.points.len() != vertex_count {
             return Err(ExportError::Invalid {
                 file: path.to_path_buf(),
                 message: format!(
                     "frame at {} s has {} points, the groom has {}",
                     frame.time,
                     frame.points.len(),
-                    self.vertex_count
+                    vertex_count
                 ),
             });
         }
@@ -454,6 +575,7 @@ fn curves_prim(
         properties,
         vertex_ranges,
         extent_padding,
+        sampled: Vec::new(),
     })
 }
 

@@ -19,10 +19,15 @@ pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), Expor
     let io_error = |e| ExportError::io(path, e);
     let mut file = AtomicFile::create(path).map_err(io_error)?;
     let mut write = || -> io::Result<()> {
-        file.write_all(header(scene, None).as_bytes())?;
+        let range = scene
+            .codes
+            .first()
+            .copied()
+            .zip(scene.codes.last().copied());
+        file.write_all(header(scene, range).as_bytes())?;
         for prim in &scene.prims {
             file.write_all(prim_opening(prim).as_bytes())?;
-            write_properties(&mut file, prim)?;
+            write_properties(&mut file, prim, &scene.codes)?;
             file.write_all(PRIM_CLOSING)?;
         }
         file.write_all(ROOT_CLOSING)
@@ -61,14 +66,46 @@ fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     header
 }
 
-fn write_properties(out: &mut dyn Write, prim: &CurvesPrim) -> io::Result<()> {
+/// The properties of a prim; those it holds as time samples only (see
+/// [`CurvesPrim::sampled`]) are declared with their metadata and given
+/// their samples at `codes`.
+fn write_properties(out: &mut dyn Write, prim: &CurvesPrim, codes: &[f64]) -> io::Result<()> {
     let mut text = String::new();
     for property in &prim.properties {
         text.clear();
-        write_property(&mut text, property);
+        match prim.samples_of(&property.name) {
+            Some(samples) => write_sampled_property(&mut text, property, codes, samples),
+            None => write_property(&mut text, property),
+        }
         out.write_all(text.as_bytes())?;
     }
     Ok(())
+}
+
+fn write_sampled_property(
+    text: &mut String,
+    property: &Property,
+    codes: &[f64],
+    samples: &[PropertyValue],
+) {
+    if let Some(interpolation) = property.interpolation {
+        let _ = writeln!(
+            text,
+            "        {} {} (\n            interpolation = \"{interpolation}\"\n        )",
+            property.type_name, property.name
+        );
+    }
+    let _ = writeln!(
+        text,
+        "        {} {}.timeSamples = {{",
+        property.type_name, property.name
+    );
+    for (code, value) in codes.iter().zip(samples) {
+        let _ = write!(text, "            {}: ", Num(*code));
+        write_value(text, value);
+        text.push_str(",\n");
+    }
+    text.push_str("        }\n");
 }
 
 fn write_property(text: &mut String, property: &Property) {
@@ -77,7 +114,18 @@ fn write_property(text: &mut String, property: &Property) {
         text.push_str("uniform ");
     }
     let _ = write!(text, "{} {} = ", property.type_name, property.name);
-    match &property.value {
+    write_value(text, &property.value);
+    if let Some(interpolation) = property.interpolation {
+        let _ = write!(
+            text,
+            " (\n            interpolation = \"{interpolation}\"\n        )"
+        );
+    }
+    text.push('\n');
+}
+
+fn write_value(text: &mut String, value: &PropertyValue) {
+    match value {
         PropertyValue::Token(token) => {
             let _ = write!(text, "\"{token}\"");
         }
@@ -92,13 +140,6 @@ fn write_property(text: &mut String, property: &Property) {
         }),
         PropertyValue::Float3s(values) => write_float3s(text, values),
     }
-    if let Some(interpolation) = property.interpolation {
-        let _ = write!(
-            text,
-            " (\n            interpolation = \"{interpolation}\"\n        )"
-        );
-    }
-    text.push('\n');
 }
 
 fn write_float3s(text: &mut String, values: &[[f32; 3]]) {
@@ -197,7 +238,7 @@ impl AnimatedUsda {
             let writer = spill.writer().map_err(io_error)?;
             writer
                 .write_all(prim_opening(prim).as_bytes())
-                .and_then(|()| write_properties(writer, prim))
+                .and_then(|()| write_properties(writer, prim, &[]))
                 .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
                 .map_err(io_error)?;
             spills.push(spill);

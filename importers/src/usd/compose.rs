@@ -17,10 +17,12 @@
 use super::{Arc, ArcTarget, Prim, Specifier, Stage};
 use crate::{ImportError, Place};
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// Deepest chain of arcs followed (a cycle ends here with an error).
 const MAX_ARC_DEPTH: usize = 64;
+/// Largest layer an arc may bring, in bytes.
+const MAX_LAYER_BYTES: u64 = 8 << 30;
 /// Most prims a composed stage may hold.
 const MAX_COMPOSED_PRIMS: usize = 4_000_000;
 
@@ -54,9 +56,7 @@ pub(super) fn compose(file: &Path, stage: Stage) -> Result<Stage, ImportError> {
         prims: 0,
         notes: Vec::new(),
     };
-    let simple = stage.sublayers.is_empty()
-        && stage.unfollowed.is_empty()
-        && stage.prims.iter().all(|p| p.arcs.is_empty());
+    let simple = stage.sublayers.is_empty() && stage.prims.iter().all(|p| p.arcs.is_empty());
     if simple {
         return Ok(stage);
     }
@@ -197,16 +197,6 @@ fn count(node: &Node) -> usize {
 impl Composer {
     /// Adds a parsed layer with its sublayers merged in; returns its index.
     fn add_layer(&mut self, file: &Path, stage: Stage, depth: usize) -> Result<usize, ImportError> {
-        if let Some((arc, place)) = stage.unfollowed.first() {
-            return Err(ImportError::malformed(
-                file,
-                place.clone(),
-                format!(
-                    "{arc}: composition arcs of crate (.usdc) layers are not followed; \
-                     write the layer as .usda or flatten it (usdcat --flatten)"
-                ),
-            ));
-        }
         let index = self.layers.len();
         self.by_file.insert(file.to_path_buf(), index);
         self.notes.extend(stage.notes);
@@ -249,12 +239,38 @@ impl Composer {
                 "{arc}: arcs nest deeper than {MAX_ARC_DEPTH} layers (a cycle?)"
             )));
         }
-        let file = from.parent().unwrap_or(Path::new("")).join(asset);
+        // Without `.` components, so that a layer reached as `./a.usda`
+        // from `./b.usda` is the layer already loaded, and errors name it plainly.
+        let file: PathBuf = from
+            .parent()
+            .unwrap_or(Path::new(""))
+            .join(asset)
+            .components()
+            .filter(|c| !matches!(c, Component::CurDir))
+            .collect();
         if let Some(&index) = self.by_file.get(&file) {
             return Ok(index);
         }
-        let bytes = std::fs::read(&file)
-            .map_err(|e| here(format!("{arc}: cannot open {}: {e}", file.display())))?;
+        let cannot_open =
+            |e: std::io::Error| here(format!("{arc}: cannot open {}: {e}", file.display()));
+        // A layer is a regular file of bounded size: an arc (which the file
+        // chooses) to a device (`/dev/zero`), a pipe or `/proc/kcore` would
+        // never end or allocate without bound.
+        let metadata = std::fs::metadata(&file).map_err(cannot_open)?;
+        if !metadata.is_file() {
+            return Err(here(format!(
+                "{arc}: {} is not a regular file",
+                file.display()
+            )));
+        }
+        if metadata.len() > MAX_LAYER_BYTES {
+            return Err(here(format!(
+                "{arc}: {} is larger than {} GiB",
+                file.display(),
+                MAX_LAYER_BYTES >> 30
+            )));
+        }
+        let bytes = std::fs::read(&file).map_err(cannot_open)?;
         let stage = super::parse_layer(&file, &bytes)?;
         self.add_layer(&file, stage, depth)
     }

@@ -5,7 +5,7 @@
 //! never with a size the file claims. Errors name the byte offset and the
 //! section or value being read.
 
-use super::{Prim, Specifier, Stage, UsdAttribute, Value};
+use super::{Arc, ArcKind, ArcTarget, Prim, Specifier, Stage, UsdAttribute, Value};
 use crate::{ImportError, Place};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -18,6 +18,37 @@ const ARRAY_BIT: u64 = 1 << 63;
 const INLINED_BIT: u64 = 1 << 62;
 const COMPRESSED_BIT: u64 = 1 << 61;
 const PAYLOAD_MASK: u64 = (1 << 48) - 1;
+
+/// Header bits of a list op (OpenUSD's `_ListOpHeader`).
+const LIST_OP_EXPLICIT: u8 = 1 << 1;
+const LIST_OP_ADDED: u8 = 1 << 2;
+const LIST_OP_DELETED: u8 = 1 << 3;
+const LIST_OP_ORDERED: u8 = 1 << 4;
+const LIST_OP_PREPENDED: u8 = 1 << 5;
+const LIST_OP_APPENDED: u8 = 1 << 6;
+
+/// What the items of a composition list op are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ArcItem {
+    /// A path index (inherits, specializes).
+    Path,
+    /// Asset string, path, layer offset, custom data (references).
+    Reference,
+    /// Asset string, path, and a layer offset from crate 0.8.0 (payloads).
+    Payload,
+}
+
+impl ArcItem {
+    /// The fewest bytes an item takes in a file of `version`.
+    fn min_size(self, version: (u8, u8, u8)) -> u64 {
+        match self {
+            ArcItem::Path => 4,
+            ArcItem::Reference => 4 + 4 + 16 + 8,
+            ArcItem::Payload if version >= (0, 8, 0) => 4 + 4 + 16,
+            ArcItem::Payload => 4 + 4,
+        }
+    }
+}
 
 const SPEC_ATTRIBUTE: u32 = 1;
 const SPEC_PRIM: u32 = 6;
@@ -98,6 +129,13 @@ enum Kind {
     AssetPath,
     TokenVector,
     StringVector,
+    /// `SdfPathListOp` (inherits, specializes).
+    PathListOp,
+    /// `SdfReferenceListOp`.
+    ReferenceListOp,
+    /// `SdfPayloadListOp`, and a single `SdfPayload` (older files).
+    PayloadListOp,
+    Payload,
     DoubleVector,
     Specifier,
     Variability,
@@ -154,12 +192,16 @@ fn kind_of(type_id: u8) -> Kind {
         28 => numbers(Scalar::F32, 4),
         29 => numbers(Scalar::F16, 4),
         30 => numbers(Scalar::I32, 4),
+        34 => Kind::PathListOp,
+        35 => Kind::ReferenceListOp,
         41 => Kind::TokenVector,
         42 => Kind::Specifier,
         44 => Kind::Variability,
         46 => Kind::TimeSamples,
+        47 => Kind::Payload,
         48 => Kind::DoubleVector,
         50 => Kind::StringVector,
+        55 => Kind::PayloadListOp,
         _ => Kind::Other,
     }
 }
@@ -459,7 +501,9 @@ impl<'a> CrateReader<'a> {
         let end = start + size;
         let path_count = self.u64_at(start, "PATHS count")?;
         let count = self.u64_at(start + 8, "PATHS entries")?;
-        if path_count > count {
+        // The path table may hold one path the tree does not: the empty
+        // path (arcs that name no prim).
+        if path_count > count.saturating_add(1) {
             return Err(self.error(
                 start,
                 format!("PATHS: {path_count} paths but {count} entries"),
@@ -684,6 +728,21 @@ impl<'a> CrateReader<'a> {
                     data,
                 })
             }
+            Kind::PathListOp => Ok(Value::Arcs(self.list_op(payload, ArcItem::Path, what)?)),
+            Kind::ReferenceListOp => Ok(Value::Arcs(self.list_op(
+                payload,
+                ArcItem::Reference,
+                what,
+            )?)),
+            Kind::PayloadListOp => Ok(Value::Arcs(self.list_op(
+                payload,
+                ArcItem::Payload,
+                what,
+            )?)),
+            Kind::Payload => {
+                let (target, _) = self.arc_item(payload, ArcItem::Payload, what)?;
+                Ok(Value::Arcs(vec![target]))
+            }
             Kind::Specifier => Ok(Value::Numbers {
                 components: 1,
                 array: false,
@@ -693,6 +752,109 @@ impl<'a> CrateReader<'a> {
                 Err(self.error(payload, format!("{what}: time samples inside time samples")))
             }
             _ => Ok(Value::Other),
+        }
+    }
+
+    /// The items of a composition list op (OpenUSD's `SdfListOp` as the
+    /// crate stores it: a header byte, then each list it flags as `u64
+    /// count` and the items). Strongest first: prepended, explicit, added,
+    /// appended; deleted and ordered items are read past, as the text
+    /// reader skips `delete` and `reorder` lists.
+    fn list_op(&self, offset: u64, item: ArcItem, what: &str) -> Result<Vec<ArcTarget>> {
+        let header = self.slice(offset, 1, what)?[0];
+        let mut at = offset + 1;
+        // In the order the crate writes them.
+        let mut lists: [(u8, Vec<ArcTarget>); 6] = [
+            (LIST_OP_EXPLICIT, Vec::new()),
+            (LIST_OP_ADDED, Vec::new()),
+            (LIST_OP_PREPENDED, Vec::new()),
+            (LIST_OP_APPENDED, Vec::new()),
+            (LIST_OP_DELETED, Vec::new()),
+            (LIST_OP_ORDERED, Vec::new()),
+        ];
+        for (bit, items) in &mut lists {
+            if header & *bit == 0 {
+                continue;
+            }
+            let count = self.u64_at(at, what)?;
+            at += 8;
+            // Every item takes at least `min_size` bytes: a count the rest
+            // of the file cannot hold is refused before anything is read.
+            let room = (self.bytes.len() as u64).saturating_sub(at);
+            if count
+                .checked_mul(item.min_size(self.version))
+                .is_none_or(|n| n > room)
+            {
+                return Err(self.error(
+                    at - 8,
+                    format!("{what}: {count} list items do not fit in the file"),
+                ));
+            }
+            for _ in 0..count {
+                let (target, next) = self.arc_item(at, item, what)?;
+                items.push(target);
+                at = next;
+            }
+        }
+        let [explicit, added, prepended, appended, _, _] = lists.map(|(_, items)| items);
+        Ok(prepended
+            .into_iter()
+            .chain(explicit)
+            .chain(added)
+            .chain(appended)
+            .collect())
+    }
+
+    /// One item of a list op at `offset`, and the offset after it.
+    fn arc_item(&self, offset: u64, item: ArcItem, what: &str) -> Result<(ArcTarget, u64)> {
+        let path_at = |at: u64| -> Result<Option<String>> {
+            let index = self.u32_at(at, what)?;
+            self.arc_path(index, at, what)
+        };
+        match item {
+            ArcItem::Path => Ok((
+                ArcTarget {
+                    asset: None,
+                    prim_path: path_at(offset)?,
+                },
+                offset + 4,
+            )),
+            ArcItem::Reference | ArcItem::Payload => {
+                let asset = self.string(u64::from(self.u32_at(offset, what)?), offset)?;
+                let prim_path = path_at(offset + 4)?;
+                // Layer offsets (two doubles) are skipped, as in the text reader.
+                let mut next = offset + 8;
+                if item == ArcItem::Reference || self.at_least((0, 8, 0)) {
+                    self.slice(next, 16, what)?;
+                    next += 16;
+                }
+                if item == ArcItem::Reference {
+                    let custom_data = self.u64_at(next, what)?;
+                    if custom_data != 0 {
+                        return Err(self.error(
+                            next,
+                            format!("{what}: a reference with customData is not read"),
+                        ));
+                    }
+                    next += 8;
+                }
+                let target = ArcTarget {
+                    asset: (!asset.is_empty()).then_some(asset),
+                    prim_path,
+                };
+                Ok((target, next))
+            }
+        }
+    }
+
+    /// The prim path an arc names by path index; `None` for the empty path
+    /// (the target layer's `defaultPrim`).
+    fn arc_path(&self, index: u32, at: u64, what: &str) -> Result<Option<String>> {
+        // The empty path has an index but no place in the path tree.
+        match self.paths.get(index as usize) {
+            Some(Some(entry)) => Ok(Some(entry.text.clone())),
+            Some(None) => Ok(None),
+            None => Err(self.error(at, format!("{what}: path index {index} out of range"))),
         }
     }
 
@@ -854,11 +1016,92 @@ impl<'a> CrateReader<'a> {
         }
     }
 
+    /// Sorts prim specs into the order usd-core traverses them: depth
+    /// first, each prim's children in its `primChildren` order (the order
+    /// they were authored in, which the path table does not keep). Prims no
+    /// `primChildren` lists (inside variants) follow in path-table order.
+    fn order_as_authored(
+        &self,
+        prim_specs: &mut [(usize, u32, Fields)],
+        root_children: &Option<u64>,
+    ) -> Result<()> {
+        let by_text: std::collections::HashMap<&str, usize> = prim_specs
+            .iter()
+            .enumerate()
+            .filter_map(|(i, (_, path, _))| {
+                let entry = self.paths.get(*path as usize)?.as_ref()?;
+                Some((entry.text.as_str(), i))
+            })
+            .collect();
+        let children = |parent: &str, rep: Option<u64>| -> Result<Vec<String>> {
+            let Some(rep) = rep else {
+                return Ok(Vec::new());
+            };
+            let names = self.value(rep, &format!("{parent} primChildren"), 0)?;
+            Ok(names
+                .text()
+                .map(|names| {
+                    names
+                        .iter()
+                        .map(|name| match parent {
+                            "/" => format!("/{name}"),
+                            _ => format!("{parent}/{name}"),
+                        })
+                        .collect()
+                })
+                .unwrap_or_default())
+        };
+        let mut rank = vec![usize::MAX; prim_specs.len()];
+        let mut next_rank = 0usize;
+        // Depth first; each spec is ranked once, so the walk ends.
+        let mut pending: Vec<String> = children("/", *root_children)?;
+        pending.reverse();
+        while let Some(path) = pending.pop() {
+            let Some(&index) = by_text.get(path.as_str()) else {
+                continue;
+            };
+            if rank[index] != usize::MAX {
+                continue;
+            }
+            rank[index] = next_rank;
+            next_rank += 1;
+            let rep = prim_specs[index]
+                .2
+                .iter()
+                .find(|(name, _)| name == "primChildren")
+                .map(|(_, rep)| *rep);
+            let mut below = children(&path, rep)?;
+            below.reverse();
+            pending.extend(below);
+        }
+        for (index, spec) in prim_specs.iter().enumerate() {
+            if rank[index] == usize::MAX {
+                rank[index] = next_rank + spec.0;
+            }
+        }
+        let mut ranked: Vec<(usize, usize)> = rank.into_iter().zip(0..).collect();
+        ranked.sort_unstable();
+        let order: Vec<usize> = ranked.into_iter().map(|(_, i)| i).collect();
+        // Apply the permutation through a copy of the keys (the fields
+        // move with their spec).
+        let mut taken: Vec<Option<(usize, u32, Fields)>> = prim_specs
+            .iter_mut()
+            .map(|spec| Some((spec.0, spec.1, std::mem::take(&mut spec.2))))
+            .collect();
+        for (slot, from) in prim_specs.iter_mut().zip(order) {
+            if let Some(spec) = taken[from].take() {
+                *slot = spec;
+            }
+        }
+        Ok(())
+    }
+
     fn stage(&self) -> Result<Stage> {
         let mut stage = Stage::default();
         // Prims sorted into the path tree's depth-first order.
         let mut prim_specs: Vec<(usize, u32, Fields)> = Vec::new();
         let mut attribute_specs: Vec<(u32, Fields)> = Vec::new();
+        let mut root_children = None;
         for &(path, fieldset, spec_type) in &self.specs {
             let entry = self
                 .paths
@@ -868,6 +1111,10 @@ impl<'a> CrateReader<'a> {
             match spec_type {
                 SPEC_PSEUDO_ROOT => {
                     for (name, rep) in self.spec_fields(fieldset)? {
+                        if name == "primChildren" {
+                            root_children = Some(rep);
+                            continue;
+                        }
                         let value = || self.value(rep, &name, 0);
                         let number = |v: Value| v.numbers(1).and_then(|n| n.first().copied());
                         match name.as_str() {
@@ -877,9 +1124,21 @@ impl<'a> CrateReader<'a> {
                             "upAxis" => {
                                 stage.up_axis = value()?.text().and_then(|t| t.first().cloned())
                             }
-                            "subLayers" => stage
-                                .unfollowed
-                                .push(("subLayers".into(), Place::Path("/".into()))),
+                            "defaultPrim" => {
+                                stage.default_prim =
+                                    value()?.text().and_then(|t| t.first().cloned())
+                            }
+                            "subLayers" => {
+                                let layers = value()?;
+                                let layers = layers.text().ok_or_else(|| {
+                                    self.error(0, "subLayers is not a list of asset paths")
+                                })?;
+                                stage.sublayers.extend(
+                                    layers
+                                        .iter()
+                                        .map(|asset| (asset.clone(), Place::Path("/".into()))),
+                                );
+                            }
                             _ => {}
                         }
                     }
@@ -889,7 +1148,7 @@ impl<'a> CrateReader<'a> {
                 _ => {}
             }
         }
-        prim_specs.sort_by_key(|s| s.0);
+        self.order_as_authored(&mut prim_specs, &root_children)?;
         let mut prim_of_path: BTreeMap<u32, usize> = BTreeMap::new();
         for (_, path, fields) in prim_specs {
             let Some(entry) = self.paths.get(path as usize).and_then(|p| p.as_ref()) else {
@@ -924,14 +1183,31 @@ impl<'a> CrateReader<'a> {
                             prim.type_name = t.clone();
                         }
                     }
-                    arc @ ("references" | "payload" | "inherits" | "specializes") => {
-                        stage
-                            .unfollowed
-                            .push((arc.to_string(), Place::Path(entry.text.clone())));
+                    key @ ("references" | "payload" | "inheritPaths" | "specializes") => {
+                        // The crate names inherits by their Sdf field, `inheritPaths`.
+                        let kind = match key {
+                            "inheritPaths" => ArcKind::Inherit,
+                            _ => match ArcKind::of_key(key) {
+                                Some(kind) => kind,
+                                None => continue,
+                            },
+                        };
+                        let what = format!("{}: {key}", entry.text);
+                        let Value::Arcs(targets) = self.value(rep, &what, 0)? else {
+                            return Err(
+                                self.error(0, format!("{what}: not a list of composition arcs"))
+                            );
+                        };
+                        prim.arcs.push(Arc {
+                            kind,
+                            targets,
+                            place: Place::Path(entry.text.clone()),
+                        });
                     }
                     _ => {}
                 }
             }
+            prim.arcs.sort_by_key(|arc| arc.kind.strength());
             if prim.in_variant && stage.notes.is_empty() {
                 stage.notes.push("variant sets not applied".into());
             }

@@ -5,7 +5,7 @@
 //! every defined `BasisCurves` prim into strands, with each prim's transform
 //! (its `xformOpOrder`, composed through its parents) applied to the points.
 //! [`compose`] first follows sublayers, references, payloads, inherits and
-//! specializes (variants are not selected).
+//! specializes, as either reader gives them (variants are not selected).
 
 mod compose;
 mod crate_reader;
@@ -29,6 +29,192 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let mut groom = to_groom(path, &stage)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
+}
+
+/// Reads a USD file as one groom per stretch of time with one topology
+/// (see [`crate::read_sequence`]): one groom unless `curveVertexCounts`
+/// change over time.
+pub fn read_sequence(path: &Path) -> Result<Vec<Groom>, ImportError> {
+    let bytes = crate::read_bytes(path)?;
+    read_sequence_bytes(path, &bytes)
+}
+
+/// [`read_sequence`] of bytes already in memory; `path` names them in errors.
+pub fn read_sequence_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Groom>, ImportError> {
+    let stage = compose::compose(path, parse_layer(path, bytes)?)?;
+    if !topology_is_sampled(&stage) {
+        let mut groom = to_groom(path, &stage)?;
+        groom.provenance.format = "usd".into();
+        return Ok(vec![groom]);
+    }
+    topology_sequence(path, &stage)
+}
+
+/// Whether any prim's `curveVertexCounts` has time samples that differ
+/// from its first value.
+fn topology_is_sampled(stage: &Stage) -> bool {
+    stage.prims.iter().any(|prim| {
+        prim.attribute("curveVertexCounts").is_some_and(|counts| {
+            let first = counts.static_value();
+            counts
+                .samples
+                .iter()
+                .any(|(_, value)| !matches!(value, Value::Blocked) && Some(value) != first)
+        })
+    })
+}
+
+/// Most (time code, prim) pairs a changing topology is evaluated at.
+const MAX_PRIM_EVALUATIONS: usize = 100_000_000;
+
+/// The stage evaluated at each time code where counts or points are
+/// sampled, grouped into runs of one topology: each run is one groom whose
+/// frames are its time codes. Values between samples are held (the last
+/// sample at or before the time, else the first), as usd-core holds
+/// integer arrays; `points` of equal length are interpolated linearly, as
+/// usd-core does.
+fn topology_sequence(path: &Path, stage: &Stage) -> Result<Vec<Groom>, ImportError> {
+    let mut codes: Vec<f64> = stage
+        .prims
+        .iter()
+        .flat_map(|prim| &prim.attributes)
+        .filter(|a| a.name == "curveVertexCounts" || a.name == "points")
+        .flat_map(|a| a.samples.iter().map(|(code, _)| *code))
+        .filter(|code| code.is_finite())
+        .collect();
+    codes.sort_by(f64::total_cmp);
+    codes.dedup();
+    // The stage is evaluated once per time code: bound the work a small
+    // file with many prims and many samples could ask for.
+    if codes.len().saturating_mul(stage.prims.len()) > MAX_PRIM_EVALUATIONS {
+        return Err(ImportError::malformed(
+            path,
+            Place::File,
+            format!(
+                "{} time codes of a changing topology over {} prims are more than {MAX_PRIM_EVALUATIONS} prim evaluations",
+                codes.len(),
+                stage.prims.len()
+            ),
+        ));
+    }
+    let codes_per_second = stage
+        .time_codes_per_second
+        .or(stage.frames_per_second)
+        .unwrap_or(24.0);
+    let mut grooms: Vec<Groom> = Vec::new();
+    for code in codes {
+        let mut groom = to_groom(path, &stage_at(stage, code))?;
+        groom.provenance.format = "usd".into();
+        let frame = Frame {
+            time: code / codes_per_second,
+            points: std::mem::take(&mut groom.points),
+        };
+        match grooms.last_mut() {
+            Some(run) if run.strand_vertex_counts == groom.strand_vertex_counts => {
+                run.frames.push(frame)
+            }
+            _ => {
+                groom.points = frame.points.clone();
+                groom.frames = vec![frame];
+                grooms.push(groom);
+            }
+        }
+    }
+    if grooms.is_empty() {
+        return Err(ImportError::malformed(
+            path,
+            Place::File,
+            "curveVertexCounts are time-sampled at no finite time code",
+        ));
+    }
+    Ok(grooms)
+}
+
+/// The stage with every time-sampled attribute replaced by its value at
+/// `code` (as a default, without samples).
+fn stage_at(stage: &Stage, code: f64) -> Stage {
+    let prims = stage
+        .prims
+        .iter()
+        .map(|prim| Prim {
+            attributes: prim
+                .attributes
+                .iter()
+                .map(|attribute| UsdAttribute {
+                    default: match value_at(attribute, code) {
+                        Some(value) => Some(value),
+                        None => attribute.default.clone(),
+                    },
+                    samples: Vec::new(),
+                    name: attribute.name.clone(),
+                    type_name: attribute.type_name.clone(),
+                    interpolation: attribute.interpolation.clone(),
+                    element_size: attribute.element_size,
+                    place: attribute.place.clone(),
+                })
+                .collect(),
+            path: prim.path.clone(),
+            type_name: prim.type_name.clone(),
+            arcs: Vec::new(),
+            place: prim.place.clone(),
+            ..*prim
+        })
+        .collect();
+    Stage {
+        prims,
+        meters_per_unit: stage.meters_per_unit,
+        up_axis: stage.up_axis.clone(),
+        time_codes_per_second: stage.time_codes_per_second,
+        frames_per_second: stage.frames_per_second,
+        default_prim: stage.default_prim.clone(),
+        sublayers: Vec::new(),
+        notes: stage.notes.clone(),
+    }
+}
+
+/// The value of a time-sampled attribute at `code`; `None` when it has no
+/// samples (its default holds).
+fn value_at(attribute: &UsdAttribute, code: f64) -> Option<Value> {
+    let samples: Vec<&(f64, Value)> = attribute
+        .samples
+        .iter()
+        .filter(|(_, value)| !matches!(value, Value::Blocked))
+        .collect();
+    let after = samples.iter().position(|(c, _)| *c > code);
+    let before = match after {
+        Some(0) => return samples.first().map(|(_, v)| v.clone()),
+        Some(i) => samples[i - 1],
+        None => return samples.last().map(|(_, v)| v.clone()),
+    };
+    let next = after.and_then(|i| samples.get(i));
+    match (attribute.name.as_str(), &before.1, next) {
+        (
+            "points",
+            Value::Numbers {
+                components,
+                array,
+                data,
+            },
+            Some((
+                next_code,
+                Value::Numbers {
+                    data: next_data, ..
+                },
+            )),
+        ) if data.len() == next_data.len() && before.0 < code => {
+            let t = (code - before.0) / (next_code - before.0);
+            Some(Value::Numbers {
+                components: *components,
+                array: *array,
+                data: data
+                    .iter()
+                    .zip(next_data)
+                    .map(|(a, b)| a + (b - a) * t)
+                    .collect(),
+            })
+        }
+        _ => Some(before.1.clone()),
+    }
 }
 
 /// One layer as the file holds it, before composition.
@@ -95,6 +281,18 @@ impl ArcKind {
             "specializes" => ArcKind::Specialize,
             _ => return None,
         })
+    }
+
+    /// Strength within a prim, strongest 0: inherits, then references and
+    /// payloads, then specializes (LIVRPS: local, inherits, variants,
+    /// references, payloads, specializes).
+    pub(crate) fn strength(self) -> u8 {
+        match self {
+            ArcKind::Inherit => 0,
+            ArcKind::Reference => 1,
+            ArcKind::Payload => 2,
+            ArcKind::Specialize => 3,
+        }
     }
 
     pub(crate) fn key(self) -> &'static str {
@@ -203,8 +401,6 @@ pub(crate) struct Stage {
     pub sublayers: Vec<(String, Place)>,
     /// What the reader passed over (variant sets), for the groom's info.
     pub notes: Vec<String>,
-    /// Arcs the reader found but cannot follow (crate files), with where.
-    pub unfollowed: Vec<(String, Place)>,
 }
 
 /// What an element of a USD value type holds.
@@ -462,7 +658,7 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
                 counts_attribute,
                 format!(
                     "topology changes at time {code} (curveVertexCounts are time-sampled); \
-                     groombake reads grooms of one topology"
+                     a bake needs one topology (inspect and convert carry the change)"
                 ),
             ));
         }

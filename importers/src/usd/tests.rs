@@ -573,3 +573,149 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     let error = error_text(&brackets);
     assert!(error.contains("nested too deeply"), "{error}");
 }
+
+/// A USD fixture of the workspace's `tests/data/usd/`.
+fn usd_fixture(name: &str) -> PathBuf {
+    workspace_data("usd").join(name)
+}
+
+/// The crate copies usd-core wrote of the composed text fixtures (arcs in
+/// the crate's list-op encodings: sublayers, external and internal
+/// references, payloads, inherits, specializes, instancing) compose to the
+/// same strands as the text fixtures.
+#[test]
+fn crate_layers_compose_like_their_text() {
+    for (text, binary) in [
+        ("reference_internal.usda", "reference_internal.usdc"),
+        ("payload_main.usda", "payload_main.usdc"),
+        ("payload_main.usda", "crate_payload_text.usdc"),
+        ("sublayer_main.usda", "sublayer_main.usdc"),
+        ("instancing.usda", "instancing.usdc"),
+        ("inherits.usda", "inherits.usdc"),
+    ] {
+        let expected = read(&usd_fixture(text)).unwrap();
+        let groom = read(&usd_fixture(binary)).unwrap_or_else(|e| panic!("{binary}: {e}"));
+        assert_eq!(
+            groom.strand_vertex_counts, expected.strand_vertex_counts,
+            "{binary}"
+        );
+        assert_eq!(groom.points, expected.points, "{binary}");
+        assert_eq!(
+            groom.provenance.metadata.get(groom::PRIMS_KEY),
+            expected.provenance.metadata.get(groom::PRIMS_KEY),
+            "{binary}: the same composed prim paths"
+        );
+    }
+}
+
+/// Bad arcs in crate layers give the errors the text path gives: the arc
+/// and the missing file, a cycle.
+#[test]
+fn bad_crate_arcs_are_named() {
+    let missing = read(&usd_fixture("crate_missing_reference.usdc"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        missing.contains("crate_missing_reference.usdc:/Head: references @./not_here.usdc@</Hair>")
+            && missing.contains("not_here.usdc: No such file"),
+        "{missing}"
+    );
+    let cycle = read(&usd_fixture("crate_cycle_a.usdc"))
+        .unwrap_err()
+        .to_string();
+    assert!(cycle.contains("(a cycle?)"), "{cycle}");
+}
+
+/// A list op claiming more items than the file holds is refused before
+/// anything is allocated for them.
+#[test]
+fn crate_list_op_counts_are_bounded() {
+    let path = usd_fixture("crate_missing_reference.usdc");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // The reference list op: header byte (prepended items), then the count.
+    let original = read_bytes(&path, &bytes).unwrap_err().to_string();
+    assert!(original.contains("not_here.usdc"), "{original}");
+    let count_at = bytes
+        .windows(9)
+        .position(|w| w[0] == 1 << 5 && w[1..] == 1u64.to_le_bytes())
+        .expect("the prepended reference list");
+    bytes[count_at + 1..count_at + 9].copy_from_slice(&u64::MAX.to_le_bytes());
+    let message = read_bytes(&path, &bytes).unwrap_err().to_string();
+    assert!(
+        message.contains("list items do not fit in the file"),
+        "{message}"
+    );
+}
+
+/// A topology that changes over time is refused by `read` (the bake) with
+/// the time it changes at, and read by `read_sequence` as one groom per
+/// topology: counts held between samples, points interpolated where their
+/// lengths agree, as usd-core evaluates them.
+#[test]
+fn time_varying_topology_reads_as_a_sequence() {
+    let path = usd_fixture("time_sampled_counts_held.usda");
+    let refusal = read(&path).unwrap_err().to_string();
+    assert!(refusal.contains("topology changes at time 3"), "{refusal}");
+    let sequence = read_sequence(&path).unwrap();
+    assert_eq!(sequence.len(), 2);
+    let (first, second) = (&sequence[0], &sequence[1]);
+    assert_eq!(first.strand_vertex_counts, [2]);
+    assert_eq!(second.strand_vertex_counts, [3]);
+    let times: Vec<f64> = first.frames.iter().map(|f| f.time).collect();
+    assert_eq!(times, [0.0, 1.0 / 24.0, 2.0 / 24.0]);
+    // The Groom Xform translates by (0, 5, 0).
+    let points: Vec<_> = first.frames.iter().map(|f| f.points.clone()).collect();
+    assert_eq!(
+        points,
+        [
+            vec![[0.0, 5.0, 0.0], [0.0, 6.0, 0.0]],
+            vec![[0.0, 5.0, 0.0], [0.0, 7.0, 0.0]],
+            vec![[0.0, 5.0, 0.0], [0.0, 8.0, 0.0]],
+        ]
+    );
+    assert_eq!(first.points, points[0], "the rest pose is the first frame");
+    assert_eq!(second.frames.len(), 1);
+    assert_eq!(second.frames[0].time, 3.0 / 24.0);
+    assert_eq!(second.points[2], [0.0, 7.0, 1.0]);
+    // A file of one topology is one groom, as `read` gives it.
+    let one = read_sequence(&usd_fixture("payload_main.usda")).unwrap();
+    assert_eq!(one, vec![read(&usd_fixture("payload_main.usda")).unwrap()]);
+}
+
+/// An arc to a device is refused before anything is read from it.
+#[test]
+fn arcs_to_devices_are_refused() {
+    let text =
+        "#usda 1.0\ndef Xform \"Head\" (\n    prepend references = @/dev/zero@</Hair>\n)\n{\n}\n";
+    let message = read_bytes(Path::new("device.usda"), text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("device.usda:3:")
+            && message.contains("references @/dev/zero@</Hair>: /dev/zero is not a regular file"),
+        "{message}"
+    );
+}
+
+/// Many samples of a changing topology over many prims are refused before
+/// the stage is evaluated at each time code.
+#[test]
+fn changing_topology_work_is_bounded() {
+    let mut text = String::from(
+        "#usda 1.0\ndef BasisCurves \"C\"\n{\n    int[] curveVertexCounts.timeSamples = {\n",
+    );
+    for code in 0..10_001 {
+        text.push_str(&format!("        {code}: [{}],\n", 2 + code % 2));
+    }
+    text.push_str("    }\n}\n");
+    for prim in 0..10_001 {
+        text.push_str(&format!("def \"P{prim}\"\n{{\n}}\n"));
+    }
+    let message = read_sequence_bytes(Path::new("many.usda"), text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("10001 time codes of a changing topology over 10002 prims"),
+        "{message}"
+    );
+}

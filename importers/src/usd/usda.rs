@@ -624,14 +624,7 @@ impl<'a> Parser<'a> {
                 }
             }
         }
-        // Strength within a prim: inherits, then references and payloads
-        // (LIVRPS: local, inherits, variants, references, payloads, specializes).
-        arcs.sort_by_key(|arc: &Arc| match arc.kind {
-            ArcKind::Inherit => 0,
-            ArcKind::Reference => 1,
-            ArcKind::Payload => 2,
-            ArcKind::Specialize => 3,
-        });
+        arcs.sort_by_key(|arc: &Arc| arc.kind.strength());
         self.expect(b'{')?;
         let index = self.stage.prims.len();
         self.stage.prims.push(Prim {
