@@ -44,16 +44,26 @@ impl AtomicFile {
             .ok_or_else(|| io::Error::other("atomic file already committed"))
     }
 
-    /// Flushes, syncs and renames the file into place.
+    /// Flushes, syncs and renames the file into place. If any of that
+    /// fails (a full disk shows here, when the buffer is flushed), the
+    /// temporary file is removed.
     pub fn commit(mut self) -> io::Result<()> {
         let writer = self
             .writer
             .take()
             .ok_or_else(|| io::Error::other("atomic file already committed"))?;
-        let file = writer.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&self.temporary, &self.destination)
+        let result = writer
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .and_then(|file| {
+                file.sync_all()?;
+                drop(file);
+                std::fs::rename(&self.temporary, &self.destination)
+            });
+        if result.is_err() {
+            let _ = std::fs::remove_file(&self.temporary);
+        }
+        result
     }
 }
 
@@ -105,6 +115,26 @@ mod tests {
         drop(file);
         assert!(!failed.exists());
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Regression: a commit that failed (at the flush, as on a full disk,
+    /// or at the rename, here onto a folder that is not empty) left its
+    /// temporary file behind.
+    #[test]
+    fn regression_a_failed_commit_removes_the_temporary() {
+        let dir = std::env::temp_dir().join(format!("groom-atomic-fail-{}", std::process::id()));
+        let folder = dir.join("taken");
+        std::fs::create_dir_all(&folder).unwrap();
+        std::fs::write(folder.join("inside"), b"x").unwrap();
+        let mut file = AtomicFile::create(&folder).unwrap();
+        file.write_all(b"data").unwrap();
+        assert!(file.commit().is_err());
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("taken")]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -543,6 +543,112 @@ fn a_later_bake_removes_stale_temporaries_of_dead_processes_only() {
     );
 }
 
+/// Runs groombake with no file allowed to grow past `max_bytes`
+/// (RLIMIT_FSIZE, in 512-byte blocks, through the shell's `ulimit -f`) and
+/// SIGXFSZ ignored, so a write past the limit fails with EFBIG as a write
+/// to a full disk fails with ENOSPC: the same failed `write` to the bake.
+fn run_with_file_size_limit(dir: &TestDir, max_bytes: u64, args: &str) -> (Option<i32>, String) {
+    let output = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {}; exec '{}' {args}",
+            max_bytes / 512,
+            env!("CARGO_BIN_EXE_groombake")
+        ))
+        .current_dir(dir.root())
+        .output()
+        .unwrap();
+    (
+        output.status.code(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+fn file_size(dir: &TestDir, name: &str) -> u64 {
+    std::fs::metadata(dir.path(name))
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .len()
+}
+
+/// Three swatch strands, a small `.usda` export and a contact sheet, which
+/// (like the HTML report) is written after the simulation.
+const WITH_SHEET: &str = "[[export]]\npath = \"out/final.usda\"\nwhat = \"final\"\n\
+                          [preview]\nsheet = \"out/sheet.png\"\nsize = [400, 400]\n";
+
+#[test]
+fn disk_full_on_the_sheet_written_last_fails_and_leaves_nothing_partial() {
+    let reference = TestDir::new();
+    std::fs::write(reference.path("t.toml"), timeline(WITH_SHEET)).unwrap();
+    reference.run_ok(&["bake", "t.toml", "-q", "--report", "r.json"]);
+    let (export, sheet, report) = (
+        file_size(&reference, "out/final.usda"),
+        file_size(&reference, "out/sheet.png"),
+        file_size(&reference, "r.json"),
+    );
+    // Room for the export and the report, not for the sheet.
+    let limit = (export.max(report) / 512 + 1) * 512;
+    assert!(
+        sheet > limit,
+        "sheet {sheet} B, export {export} B, report {report} B"
+    );
+
+    let dir = TestDir::new();
+    std::fs::write(dir.path("t.toml"), timeline(WITH_SHEET)).unwrap();
+    let (code, stderr) = run_with_file_size_limit(&dir, limit, "bake t.toml -q --report r.json");
+    assert_eq!(code, Some(1), "{stderr}");
+    assert_one_line(&stderr);
+    assert!(stderr.contains("out/sheet.png"), "names the file: {stderr}");
+    assert!(stderr.contains("File too large"), "says why: {stderr}");
+    assert!(
+        !stderr.contains(".groombake-"),
+        "names a staged file: {stderr}"
+    );
+    // Nothing under a final name (the export waited for the sheet), no
+    // temporary, and a report that says the bake failed.
+    assert_eq!(
+        files_under(dir.root()),
+        vec!["r.json".to_string(), "t.toml".to_string()]
+    );
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(dir.path("r.json")).unwrap()).unwrap();
+    assert_eq!(report["status"], "failed");
+    assert_eq!(report["exit_code"], 1);
+}
+
+#[test]
+fn disk_full_on_the_html_report_written_last_fails_and_leaves_nothing_partial() {
+    let text = timeline("[[export]]\npath = \"final.usda\"\nwhat = \"final\"\n");
+    let reference = TestDir::new();
+    std::fs::write(reference.path("t.toml"), &text).unwrap();
+    reference.run_ok(&["bake", "t.toml", "-q", "--report", "r.html"]);
+    let (export, html) = (
+        file_size(&reference, "final.usda"),
+        file_size(&reference, "r.html"),
+    );
+    let limit = (export / 512 + 1) * 512;
+    assert!(html > limit, "report {html} B, export {export} B");
+
+    let dir = TestDir::new();
+    std::fs::write(dir.path("t.toml"), &text).unwrap();
+    // An old report is not left to describe the new outputs.
+    std::fs::write(dir.path("r.html"), b"old report").unwrap();
+    let (code, stderr) = run_with_file_size_limit(&dir, limit, "bake t.toml -q --report r.html");
+    assert_eq!(code, Some(1), "{stderr}");
+    assert_one_line(&stderr);
+    assert!(stderr.contains("r.html"), "names the file: {stderr}");
+    assert!(stderr.contains("File too large"), "says why: {stderr}");
+    // The export is whole (the same bytes as without the limit); there is
+    // no report, old or partial, and no temporary.
+    assert_eq!(
+        std::fs::read(dir.path("final.usda")).unwrap(),
+        std::fs::read(reference.path("final.usda")).unwrap()
+    );
+    assert_eq!(
+        files_under(dir.root()),
+        vec!["final.usda".to_string(), "t.toml".to_string()]
+    );
+}
+
 // --- The physical sanity watchdog -------------------------------------------------
 
 fn bake_report(dir: &TestDir, text: &str) -> (Value, String) {

@@ -440,6 +440,53 @@ mod tests {
         assert_eq!(times, vec![0.0, 0.1, 0.35]);
     }
 
+    /// Regression: a time sampling that stores no time was reported as
+    /// "0 stored times (must be 1 to 0)"; it says what is wrong instead, as
+    /// does one that stores more times than its block holds.
+    #[test]
+    fn regression_time_sampling_with_no_stored_times_says_so() {
+        let dir = TempDir::new("times");
+        let mut groom = sample_groom();
+        groom.frames = [0.0, 0.1, 0.35]
+            .iter()
+            .map(|&time| Frame {
+                time,
+                points: groom.points.clone(),
+            })
+            .collect();
+        let bytes = exported(&dir, "times.abc", &groom);
+        // The archive's fifth child holds the time samplings, each
+        // `u32 max samples, f64 time per cycle, u32 count, f64 times[count]`.
+        let (samplings_at, samplings) = {
+            let ogawa = ogawa::Ogawa::open(&bytes).unwrap();
+            let reference = ogawa.group(ogawa.root()).unwrap()[4];
+            let data = ogawa.data(reference).unwrap();
+            ((reference & !ogawa::DATA_BIT) as usize + 8, data.to_vec())
+        };
+        let first_count = u32::from_le_bytes(samplings[12..16].try_into().unwrap());
+        assert!(first_count >= 1, "the export stores times");
+        let with_count = |count: u32| {
+            let mut bytes = bytes.clone();
+            let at = samplings_at + 12;
+            bytes[at..at + 4].copy_from_slice(&count.to_le_bytes());
+            bytes
+        };
+        let text = assert_clean_error(Path::new("none.abc"), &with_count(0));
+        assert!(
+            text.ends_with("time sampling 0: no stored times (at least one is needed)"),
+            "{text}"
+        );
+        assert!(!text.contains("must be"), "{text}");
+        let room = (samplings.len() - 16) / 8;
+        let text = assert_clean_error(Path::new("many.abc"), &with_count(1000));
+        assert!(
+            text.ends_with(&format!(
+                "time sampling 0: 1000 stored times, but the block has room for {room}"
+            )),
+            "{text}"
+        );
+    }
+
     fn assert_clean_error(path: &Path, bytes: &[u8]) -> String {
         match parse(path, bytes) {
             Ok(_) => panic!("{} bytes parsed without error", bytes.len()),

@@ -2,11 +2,15 @@
 //!
 //! Every count and offset read from the file is checked against the bytes
 //! there before it is used; buffers grow with the data actually decoded,
-//! never with a size the file claims. Errors name the byte offset and the
-//! section or value being read.
+//! never with a size the file claims. Compressed integers are bounded
+//! twice before they are decoded: by what their compressed bytes can hold
+//! at all, and, because LZ4 and the integer coding let one byte stand for
+//! about a thousand integers, by a decode budget of a few times the file's
+//! size. Errors name the byte offset and the section or value being read.
 
 use super::{Arc, ArcKind, ArcTarget, Prim, Specifier, Stage, UsdAttribute, Value};
 use crate::{ImportError, Place};
+use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -50,6 +54,18 @@ impl ArcItem {
     }
 }
 
+/// What the decoded tables, integer arrays and path texts of one file may
+/// take: `DECODE_FACTOR` times its bytes plus `DECODE_ALLOWANCE`. Real
+/// files decode to about their own size (points are stored raw); a
+/// crafted one can make each compressed byte a thousand integers.
+const DECODE_FACTOR: u64 = 16;
+const DECODE_ALLOWANCE: u64 = 64 << 20;
+/// At most this many bytes come out of one byte of an LZ4 block (a
+/// match-length byte of 255 adds 255 bytes).
+const LZ4_MAX_RATIO: u64 = 255;
+/// Path tree depth (the text reader's nesting bound).
+const MAX_PATH_DEPTH: usize = 256;
+
 const SPEC_ATTRIBUTE: u32 = 1;
 const SPEC_PRIM: u32 = 6;
 const SPEC_PSEUDO_ROOT: u32 = 7;
@@ -69,6 +85,11 @@ pub(super) fn read(path: &Path, bytes: &[u8]) -> Result<Stage> {
         fieldsets: Vec::new(),
         paths: Vec::new(),
         specs: Vec::new(),
+        decode_budget: Cell::new(
+            (bytes.len() as u64)
+                .saturating_mul(DECODE_FACTOR)
+                .saturating_add(DECODE_ALLOWANCE),
+        ),
     };
     reader.structure()?;
     reader.stage()
@@ -246,6 +267,8 @@ struct CrateReader<'a> {
     paths: Vec<Option<PathEntry>>,
     /// `(path, fieldset, spec type)`.
     specs: Vec<(u32, u32, u32)>,
+    /// Bytes that decoding may still allocate ([`DECODE_FACTOR`]).
+    decode_budget: Cell<u64>,
 }
 
 impl<'a> CrateReader<'a> {
@@ -267,6 +290,23 @@ impl<'a> CrateReader<'a> {
                 ),
             )),
         }
+    }
+
+    /// Takes `bytes` from the decode budget before they are allocated.
+    fn charge(&self, offset: u64, bytes: u64, what: &str) -> Result<()> {
+        let left = self.decode_budget.get();
+        if bytes > left {
+            return Err(self.error(
+                offset,
+                format!(
+                    "{what}: decoding would take more than {DECODE_FACTOR} times the file's \
+                     size (counts far beyond what a file of {} bytes carries)",
+                    self.bytes.len()
+                ),
+            ));
+        }
+        self.decode_budget.set(left - bytes);
+        Ok(())
     }
 
     fn u64_at(&self, offset: u64, what: &str) -> Result<u64> {
@@ -391,6 +431,17 @@ impl<'a> CrateReader<'a> {
                 })?;
             return Ok((Vec::new(), next));
         }
+        // Before anything is decoded: the compressed bytes must be able to
+        // hold `count` coded integers (a common value and 2 bits each)...
+        let size = (self.u64_at(offset, what)?).min(end.saturating_sub(offset + 8));
+        if width + count.div_ceil(4) > size.saturating_mul(LZ4_MAX_RATIO) {
+            return Err(self.error(
+                offset,
+                format!("{what}: {count} integers cannot be coded in {size} compressed bytes"),
+            ));
+        }
+        // ...and the decoded integers must fit the decode budget.
+        self.charge(offset, count.saturating_mul(8), what)?;
         let (buffer, next) = self.compressed(offset, end, max, what)?;
         let ints = decode_ints(&buffer, count, wide)
             .map_err(|message| self.error(offset, format!("{what}: {message}")))?;
@@ -514,27 +565,35 @@ impl<'a> CrateReader<'a> {
         let (elements, next) =
             self.compressed_ints(next, end, count, false, "PATHS element tokens")?;
         let (jumps, _) = self.compressed_ints(next, end, count, false, "PATHS jumps")?;
+        let entry_size = std::mem::size_of::<Option<PathEntry>>() as u64;
+        self.charge(start, path_count.saturating_mul(entry_size), "PATHS")?;
         let mut paths: Vec<Option<PathEntry>> = vec![None; path_count as usize];
         let bad = |message: String| self.error(start, format!("PATHS: {message}"));
-        // (entry, parent path) still to walk; every entry is visited once.
-        let mut pending: Vec<(usize, Option<u32>)> = if count > 0 {
-            vec![(0, None)]
+        // (entry, parent path, its depth) still to walk; every entry is
+        // visited once.
+        let mut pending: Vec<(usize, Option<u32>, usize)> = if count > 0 {
+            vec![(0, None, 0)]
         } else {
             Vec::new()
         };
         let mut visits = 0u64;
         let mut order = 0usize;
-        while let Some((mut entry, mut parent)) = pending.pop() {
+        while let Some((mut entry, mut parent, mut depth)) = pending.pop() {
             loop {
-                visits += 1;
-                if visits > count {
-                    return Err(bad("the path tree visits an entry twice".into()));
-                }
                 let (Some(&index), Some(&element), Some(&jump)) =
                     (indexes.get(entry), elements.get(entry), jumps.get(entry))
                 else {
                     return Err(bad(format!("entry {entry} is out of range")));
                 };
+                visits += 1;
+                if visits > count {
+                    return Err(bad("the path tree visits an entry twice".into()));
+                }
+                if depth > MAX_PATH_DEPTH {
+                    return Err(bad(format!(
+                        "the path tree is nested deeper than {MAX_PATH_DEPTH} at entry {entry}"
+                    )));
+                }
                 let index = u32::try_from(index)
                     .ok()
                     .filter(|&i| (i as u64) < path_count)
@@ -560,6 +619,7 @@ impl<'a> CrateReader<'a> {
                         }
                     }
                 };
+                self.charge(start, text.len() as u64, "PATHS")?;
                 let slot = paths
                     .get_mut(index as usize)
                     .ok_or_else(|| bad(format!("path index {index} out of range")))?;
@@ -578,10 +638,11 @@ impl<'a> CrateReader<'a> {
                         .ok_or_else(|| {
                             bad(format!("jump {jump} at entry {entry} leaves the table"))
                         })?;
-                    pending.push((sibling, parent));
+                    pending.push((sibling, parent, depth));
                 }
                 if has_child {
                     parent = Some(index);
+                    depth += 1;
                     entry += 1;
                 } else if has_sibling {
                     entry += 1;

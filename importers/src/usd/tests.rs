@@ -719,3 +719,130 @@ fn changing_topology_work_is_bounded() {
         "{message}"
     );
 }
+
+/// A compressed integer array as the crate stores it (`u64` size, then
+/// TfFastCompression: chunk count 0 and one LZ4 block) whose bytes decode
+/// to `head`, `zeros` zero bytes and `tail`: a match of offset 1 repeats
+/// the zero after `head`, 255 bytes for each length byte.
+fn compressed_run(head: &[u8], zeros: usize, tail: &[u8]) -> Vec<u8> {
+    assert!(head.len() < 15 && tail.len() < 15 && zeros >= 5);
+    let mut block = vec![0u8];
+    let literals = [head, &[0]].concat();
+    let extra = zeros - 1 - 4;
+    block.push(((literals.len() as u8) << 4) | extra.min(15) as u8);
+    block.extend_from_slice(&literals);
+    block.extend_from_slice(&[1, 0]);
+    if extra >= 15 {
+        let mut rest = extra - 15;
+        while rest >= 255 {
+            block.push(255);
+            rest -= 255;
+        }
+        block.push(rest as u8);
+    }
+    block.push((tail.len() as u8) << 4);
+    block.extend_from_slice(tail);
+    let mut out = (block.len() as u64).to_le_bytes().to_vec();
+    out.extend_from_slice(&block);
+    out
+}
+
+/// A PATHS section of `entries` paths in one chain, /a/a/a/...: indexes
+/// 0, 1, 2, ... (delta 1 coded as the common value), element token 0 and
+/// jump -1 (a child, no sibling) for every entry. A few kilobytes hold
+/// millions of entries.
+fn chain_paths_section(entries: u64) -> Vec<u8> {
+    let code_bytes = entries.div_ceil(4) as usize;
+    let mut section = entries.to_le_bytes().to_vec();
+    section.extend_from_slice(&entries.to_le_bytes());
+    // First delta 0 (a 1-byte code), then the common value 1.
+    section.extend(compressed_run(&[1, 0, 0, 0, 1], code_bytes - 1, &[0]));
+    section.extend(compressed_run(&[0, 0, 0, 0], code_bytes, &[]));
+    // First delta -1, then the common value 0.
+    section.extend(compressed_run(&[0, 0, 0, 0, 1], code_bytes - 1, &[0xff]));
+    section
+}
+
+/// `reference.usdc` with its PATHS section replaced by `section`, appended
+/// after the table of contents.
+fn with_paths_section(section: &[u8]) -> Vec<u8> {
+    let mut bytes = std::fs::read(data("reference.usdc")).unwrap();
+    let u64_at =
+        |bytes: &[u8], at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+    let toc = u64_at(&bytes, 16) as usize;
+    let entry = (0..u64_at(&bytes, toc) as usize)
+        .map(|i| toc + 8 + 32 * i)
+        .find(|&at| bytes[at..at + 16].starts_with(b"PATHS\0"))
+        .expect("a PATHS section");
+    let start = bytes.len() as u64;
+    bytes[entry + 16..entry + 24].copy_from_slice(&start.to_le_bytes());
+    bytes[entry + 24..entry + 32].copy_from_slice(&(section.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(section);
+    bytes
+}
+
+/// Regression: a PATHS section of a few kilobytes could claim about a
+/// thousand path entries per byte (LZ4 and the integer coding compress a
+/// regular table that far); the reader decoded them all and sized its path
+/// table by the count, gigabytes for this 140 KB file. The decode budget
+/// stops it before the integers are decoded.
+#[test]
+fn regression_compressed_path_count_is_bounded_by_the_file_before_decoding() {
+    let entries = 40_000_000;
+    let bytes = with_paths_section(&chain_paths_section(entries));
+    assert!(bytes.len() < 200_000, "{} bytes", bytes.len());
+    let error = read_bytes(std::path::Path::new("bomb.usdc"), &bytes)
+        .unwrap_err()
+        .to_string();
+    assert!(error.starts_with("bomb.usdc:offset "), "{error}");
+    assert!(
+        error.contains("PATHS indexes: decoding would take more than 16 times the file's size"),
+        "{error}"
+    );
+}
+
+/// Regression: a count no compressed bytes could hold is refused before
+/// anything is decoded.
+#[test]
+fn regression_compressed_count_beyond_its_bytes_is_refused() {
+    let mut section = chain_paths_section(1000);
+    let count = 1u64 << 40;
+    section[..8].copy_from_slice(&count.to_le_bytes());
+    section[8..16].copy_from_slice(&count.to_le_bytes());
+    let bytes = with_paths_section(&section);
+    let error = read_bytes(std::path::Path::new("count.usdc"), &bytes)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains(&format!(
+            "PATHS indexes: {count} integers cannot be coded in"
+        )),
+        "{error}"
+    );
+}
+
+/// Regression: a chain of path entries, each the child of the one before,
+/// made path texts whose total length grew with the square of the chain
+/// (100,000 entries: gigabytes). The path tree's depth is bounded as the
+/// text reader's nesting is.
+#[test]
+fn regression_path_chain_depth_is_bounded() {
+    let bytes = with_paths_section(&chain_paths_section(100_000));
+    let error = read_bytes(std::path::Path::new("chain.usdc"), &bytes)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("PATHS: the path tree is nested deeper than 256 at entry 257"),
+        "{error}"
+    );
+    // 200 entries: not refused for its depth (but for its last entry,
+    // which claims a child after the end of the table).
+    let bytes = with_paths_section(&chain_paths_section(200));
+    let error = read_bytes(std::path::Path::new("short.usdc"), &bytes)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.ends_with("PATHS: entry 200 is out of range"),
+        "{error}"
+    );
+}
