@@ -1,6 +1,7 @@
 //! Solver cost per step (the workload of `groombake bench`): 1,000
-//! strands x 32 vertices, 5 iterations, on 1 and 2 threads, free, with
-//! hair-hair (alpha 5), with a ball head and with the mesh head
+//! strands x 32 vertices, the physical model at its default iterations, on
+//! 1 and 2 threads, free, with hair-hair (alpha 5), with a ball head and
+//! with the mesh head; and the paper's model free at 5 iterations
 //! (samples/head.obj). `groombake bench` measures 10,000 strands and more.
 
 // A benchmark harness: a failure to set up is a bug to see at once.
@@ -8,18 +9,28 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use groombake::bench::{HeadCollider, Workload};
+use groombake::sim::Model;
 
 fn step(c: &mut Criterion) {
     let head = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
     let plain = Workload {
         strands: 1_000,
         vertices: 32,
-        iterations: 5,
+        model: Model::Physical,
+        iterations: Model::Physical.default_iterations(),
         hair_hair: None,
         collider: HeadCollider::None,
     };
     let cases = [
         ("free", plain.clone()),
+        (
+            "paper_free",
+            Workload {
+                model: Model::Paper,
+                iterations: 5,
+                ..plain.clone()
+            },
+        ),
         (
             "hair_hair",
             Workload {
@@ -64,7 +75,9 @@ fn step(c: &mut Criterion) {
             // Past the first fall, as `groombake bench` times it.
             pool.install(|| (0..10).try_for_each(|_| scene.step()))
                 .expect("warm-up");
-            group.bench_function(format!("1000x32_5it_{name}_{threads}threads"), |b| {
+            let iterations = workload.iterations;
+            let id = format!("1000x32_{iterations}it_{name}_{threads}threads");
+            group.bench_function(id, |b| {
                 b.iter(|| pool.install(|| scene.step().expect("step")))
             });
         }

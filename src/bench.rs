@@ -13,8 +13,8 @@
 use crate::sim::parry3d::math::Vector;
 use crate::sim::parry3d::shape::SharedShape;
 use crate::sim::{
-    self, Collider, ColliderSet, Environment, Material, Pose, SimError, Solver, SolverParameters,
-    StrandSet,
+    self, Collider, ColliderSet, Environment, Material, Model, Pose, SimError, Solver,
+    SolverParameters, StrandSet,
 };
 use std::path::PathBuf;
 use std::time::Instant;
@@ -35,6 +35,8 @@ pub enum HeadCollider {
 pub struct Workload {
     pub strands: usize,
     pub vertices: usize,
+    /// The elastic model (real hair's defaults for the physical one).
+    pub model: Model,
     pub iterations: u32,
     /// `alpha` of the hair-hair penalty (20); `None` leaves it off.
     pub hair_hair: Option<f32>,
@@ -87,7 +89,11 @@ impl Workload {
             hair_hair_strength: self.hair_hair,
             ..SolverParameters::default()
         })?;
-        let strands = StrandSet::from_groom(&groom, &Material::default())?;
+        let material = Material {
+            model: self.model,
+            ..Material::default()
+        };
+        let strands = StrandSet::from_groom(&groom, &material)?;
         let mut colliders = ColliderSet::new();
         let shape = match &self.collider {
             HeadCollider::None => None,
@@ -308,6 +314,7 @@ mod tests {
         let workload = Workload {
             strands: 300,
             vertices: 24,
+            model: Model::Physical,
             iterations: 5,
             hair_hair,
             collider: HeadCollider::Mesh(

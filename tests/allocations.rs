@@ -63,6 +63,7 @@ fn hair_hair_and_a_mesh_collider_allocate_nothing_per_step() {
     let free = Workload {
         strands: 400,
         vertices: 32,
+        model: groombake::sim::Model::Physical,
         iterations: 5,
         hair_hair: None,
         collider: HeadCollider::None,

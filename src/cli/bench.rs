@@ -4,6 +4,7 @@
 use super::BadInput;
 use clap::Args;
 use groombake::bench::{self, HeadCollider, Workload};
+use groombake::sim::Model;
 use std::path::PathBuf;
 
 #[derive(Debug, Args)]
@@ -17,9 +18,13 @@ pub struct BenchArgs {
     /// Worker threads (default: all cores; at most 1024).
     #[arg(long, value_parser = super::bake::parse_threads)]
     threads: Option<usize>,
-    /// Constraint iterations per step.
-    #[arg(long, default_value_t = 5)]
-    iterations: u32,
+    /// Elastic model: `physical` (real hair, direct solve) or `paper`.
+    #[arg(long, default_value = "physical", value_parser = ["physical", "paper"])]
+    model: String,
+    /// Constraint iterations per step (default: the model's, 1 physical,
+    /// 5 paper).
+    #[arg(long)]
+    iterations: Option<u32>,
     /// Steps timed (after 10 untimed ones); by default enough for about 2 s.
     #[arg(long)]
     steps: Option<usize>,
@@ -56,10 +61,16 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             return Err(BadInput("--hair-hair must be in [0, 10]".into()).into());
         }
     }
+    let model = if args.model == "paper" {
+        Model::Paper
+    } else {
+        Model::Physical
+    };
     let workload = Workload {
         strands: args.strands,
         vertices: args.vertices,
-        iterations: args.iterations,
+        model,
+        iterations: args.iterations.unwrap_or(model.default_iterations()),
         hair_hair: args.hair_hair,
         collider: collider_of(&args.collider)?,
     };
@@ -81,6 +92,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         let json = serde_json::json!({
             "strands": workload.strands,
             "vertices": workload.vertices,
+            "model": args.model,
             "threads": threads,
             "iterations": workload.iterations,
             "hair_hair": workload.hair_hair,
@@ -111,11 +123,12 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         println!("{json}");
     } else {
         println!(
-            "{} strands x {} vertices, {} iterations, {} threads: {} steps in {:.3} s, \
+            "{} strands x {} vertices, {} model, {} iterations, {} threads: {} steps in {:.3} s, \
              {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per vertex-iteration \
              ({} ns of CPU time per vertex-step)",
             workload.strands,
             workload.vertices,
+            args.model,
             workload.iterations,
             threads,
             report.timing.steps,

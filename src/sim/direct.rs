@@ -12,13 +12,19 @@
 //! length) and the stretch/shear of edge `k`. Each block shares unknowns only with its
 //! neighbours, so `J W J^T + alpha/dt^2` is block-tridiagonal and one
 //! Newton-XPBD iteration costs O(edges). Hand-written rather than a sparse
-//! crate: the 6x6 blocks are fixed-size and the solve must not allocate per
-//! step; it runs in f64 because hair is very stiff for its mass (the
-//! system's entries span ~1e-3 to ~1e12).
+//! crate: the 6x6 blocks are fixed-size and sparse in a known pattern
+//! (written out below), and the solve must not allocate per step; it runs
+//! in f64 because hair is very stiff for its mass (the system's entries
+//! span ~1e-3 to ~1e12).
+//!
+//! The solve is generic over [`Real`]: `f64` steps one strand, `f64x4`
+//! four strands in SIMD lanes with the same operations in the same order,
+//! so a strand's result does not depend on its group.
 
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use super::lanes::{F64x4, Real};
 use super::math::{Quat, V3};
 
 /// The largest frame rotation one iteration applies, radians: a trust
@@ -28,10 +34,9 @@ use super::math::{Quat, V3};
 /// free motion.
 const MAX_TURN: f64 = 0.1;
 
-type M6 = [[f64; 6]; 6];
-type V6 = [f64; 6];
-type M3 = [[f64; 3]; 3];
-type D3 = [f64; 3];
+type M3<T> = [[T; 3]; 3];
+type D3<T> = [T; 3];
+type D6<T> = [T; 6];
 
 /// Per-step constants of one edge (block) of a strand.
 #[derive(Debug, Clone, Copy, Default)]
@@ -46,24 +51,11 @@ pub struct EdgeCompliance {
     pub twist: f64,
 }
 
-/// Scratch of one strand's direct solve (reused across steps).
-#[derive(Debug, Default)]
-pub struct Direct {
-    p: Vec<D3>,
-    q: Vec<[f64; 4]>,
-    lambda: Vec<V6>,
-    diag: Vec<M6>,
-    upper: Vec<M6>,
-    rhs: Vec<V6>,
-    /// Per block: `D'^-1 U` and `D'^-1 b'` of the forward sweep.
-    y_mat: Vec<M6>,
-    y_vec: Vec<V6>,
-    g: Vec<M3>,
-    d3: Vec<D3>,
-}
-
 /// What one strand's solve reads.
 pub struct DirectInput<'a> {
+    /// Predicted positions (`n`) and frames (`n - 1`).
+    pub p: &'a [V3],
+    pub q: &'a [Quat],
     /// Vertex inverse masses (0: pinned or driven).
     pub w: &'a [f32],
     /// Frame inverse rotational inertias across the tangent (0: fixed).
@@ -79,432 +71,670 @@ pub struct DirectInput<'a> {
     pub dt: f32,
 }
 
-impl Direct {
-    /// Loads the predicted positions and frames and resets the multipliers.
-    pub fn begin(&mut self, p: &[V3], q: &[Quat]) {
-        let n = p.len();
+/// The constants of block `k` for a step.
+#[derive(Debug, Clone, Copy, Default)]
+struct Constants<T> {
+    l: T,
+    /// `w_k + w_{k+1}` (the edge's vertices) and `w_{k+1}` (the vertex it
+    /// shares with the next edge).
+    w_pair: T,
+    w_next: T,
+    /// Frame `k`'s inverse inertia across the tangent and `w_twist - w_q`.
+    wq: T,
+    dw: T,
+    /// The same of frame `k - 1` (0 for the root joint or a fixed frame).
+    wq_before: T,
+    dw_before: T,
+    /// Compliances over `dt^2`: shear, stretch, bend, twist.
+    a_sh: T,
+    a_st: T,
+    a_b: T,
+    a_t: T,
+    rest: D3<T>,
+    rest_w: T,
+}
+
+/// The part below the diagonal of a unit lower triangular 6x6 matrix,
+/// packed by rows (half the memory of the full block in the sweep).
+#[derive(Debug, Clone, Copy, Default)]
+struct Unit<T>([T; 15]);
+
+impl<T> std::ops::Index<(usize, usize)> for Unit<T> {
+    type Output = T;
+    #[inline(always)]
+    fn index(&self, (i, j): (usize, usize)) -> &T {
+        debug_assert!(j < i);
+        &self.0[i * (i - 1) / 2 + j]
+    }
+}
+
+impl<T> std::ops::IndexMut<(usize, usize)> for Unit<T> {
+    #[inline(always)]
+    fn index_mut(&mut self, (i, j): (usize, usize)) -> &mut T {
+        debug_assert!(j < i);
+        &mut self.0[i * (i - 1) / 2 + j]
+    }
+}
+
+/// Block `k`'s linearisation and factor, rebuilt every iteration.
+#[derive(Debug, Clone, Copy, Default)]
+struct Factor<T> {
+    d3: D3<T>,
+    /// The bend Jacobian on frame `k` and `G d3`.
+    g: M3<T>,
+    g_d3: D3<T>,
+    /// `L D L^T` factor of the eliminated diagonal block: `L` (unit lower,
+    /// below the diagonal) and `D^-1`.
+    unit: Unit<T>,
+    inv: D6<T>,
+    /// `D^-1 Z` with `Z = L^-1 U` the coupling to block `k + 1`, by its
+    /// non-zero 3x3 parts: top left, bottom left, bottom right (lower
+    /// triangular); the top right is zero.
+    z_tl: M3<T>,
+    z_bl: M3<T>,
+    z_br: M3<T>,
+    /// `D^-1 L^-1 b'` in the forward sweep, the solution `dlambda` after it.
+    t: D6<T>,
+}
+
+/// Scratch of the direct solve of `T::WIDTH` strands of one vertex count
+/// (reused across steps).
+#[derive(Debug, Default)]
+pub struct Direct<T> {
+    w: Vec<T>,
+    p: Vec<D3<T>>,
+    q: Vec<[T; 4]>,
+    lambda: Vec<D6<T>>,
+    constants: Vec<Constants<T>>,
+    factors: Vec<Factor<T>>,
+    root: [T; 4],
+}
+
+impl<T: Real> Direct<T> {
+    /// Loads the predicted positions and frames and the constants of
+    /// `T::WIDTH` strands of one vertex count, and resets the multipliers.
+    pub fn begin(&mut self, strands: &[DirectInput<'_>]) {
+        debug_assert_eq!(strands.len(), T::WIDTH);
+        let n = strands[0].p.len();
         let m = n - 1;
+        // The factors are fully written by every iteration before being
+        // read: resized only when the strand length changes.
+        if self.factors.len() != m {
+            self.factors.clear();
+            self.factors.resize(m, Factor::default());
+        }
+        self.w.clear();
+        self.w
+            .extend((0..n).map(|i| gather::<T>(strands, |s| s.w[i] as f64)));
         self.p.clear();
         self.p
-            .extend(p.iter().map(|v| [v[0] as f64, v[1] as f64, v[2] as f64]));
+            .extend((0..n).map(|i| build::<T, 3>(|c| gather(strands, |s| s.p[i][c] as f64))));
         self.q.clear();
-        self.q.extend(
-            q[..m]
-                .iter()
-                .map(|v| [v[0] as f64, v[1] as f64, v[2] as f64, v[3] as f64]),
-        );
-        for v in [&mut self.lambda, &mut self.rhs, &mut self.y_vec] {
-            v.clear();
-            v.resize(m, [0.0; 6]);
-        }
-        for v in [&mut self.diag, &mut self.upper, &mut self.y_mat] {
-            v.clear();
-            v.resize(m, [[0.0; 6]; 6]);
-        }
-        self.g.clear();
-        self.g.resize(m, [[0.0; 3]; 3]);
-        self.d3.clear();
-        self.d3.resize(m, [0.0; 3]);
+        self.q
+            .extend((0..m).map(|k| build::<T, 4>(|c| gather(strands, |s| s.q[k][c] as f64))));
+        self.root = build(|c| gather(strands, |s| s.root_frame[c] as f64));
+        self.lambda.clear();
+        self.lambda.resize(m, [T::splat(0.0); 6]);
+        self.constants.clear();
+        self.constants.extend((0..m).map(|k| {
+            // Frame k - 1's inertia where it is free.
+            let before = |s: &DirectInput<'_>, w: &[f32]| {
+                if k >= 1 && s.w_q[k - 1] > 0.0 {
+                    w[k - 1] as f64
+                } else {
+                    0.0
+                }
+            };
+            let inv_dt2 = |s: &DirectInput<'_>| 1.0 / (s.dt as f64 * s.dt as f64);
+            Constants {
+                l: gather(strands, |s| s.l[k] as f64),
+                w_pair: gather(strands, |s| s.w[k] as f64 + s.w[k + 1] as f64),
+                w_next: gather(strands, |s| s.w[k + 1] as f64),
+                wq: gather(strands, |s| s.w_q[k] as f64),
+                dw: gather(strands, |s| s.w_twist[k] as f64 - s.w_q[k] as f64),
+                wq_before: gather(strands, |s| before(s, s.w_q)),
+                dw_before: gather(strands, |s| before(s, s.w_twist) - before(s, s.w_q)),
+                a_sh: gather(strands, |s| s.compliance[k].shear * inv_dt2(s)),
+                a_st: gather(strands, |s| s.compliance[k].stretch * inv_dt2(s)),
+                a_b: gather(strands, |s| s.compliance[k].bend * inv_dt2(s)),
+                a_t: gather(strands, |s| s.compliance[k].twist * inv_dt2(s)),
+                rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
+                rest_w: gather(strands, |s| {
+                    let r = s.rest[k].map(|v| v as f64);
+                    (1.0 - (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]))
+                        .max(0.0)
+                        .sqrt()
+                }),
+            }
+        }));
     }
 
-    /// Writes the positions and frames back (f32).
-    pub fn end(&self, p: &mut [V3], q: &mut [Quat]) {
-        for (o, v) in p.iter_mut().zip(&self.p) {
-            *o = [v[0] as f32, v[1] as f32, v[2] as f32];
-        }
+    /// Writes lane `lane`'s positions and frames back (f32).
+    pub fn end(&self, lane: usize, p: &mut [V3], q: &mut [Quat]) {
+        self.positions_f32(lane, p);
         for (o, v) in q.iter_mut().zip(&self.q) {
-            *o = [v[0] as f32, v[1] as f32, v[2] as f32, v[3] as f32];
+            *o = build(|c| v[c].lane(lane) as f32);
         }
     }
 
-    /// Positions moved by something else (collisions) between iterations.
-    pub fn set_positions(&mut self, p: &[V3]) {
+    /// Lane `lane`'s positions, moved by something else (collisions)
+    /// between iterations.
+    pub fn set_positions(&mut self, lane: usize, p: &[V3]) {
         for (o, v) in self.p.iter_mut().zip(p) {
-            *o = [v[0] as f64, v[1] as f64, v[2] as f64];
+            for c in 0..3 {
+                let old = o[c];
+                o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
+            }
         }
     }
 
-    pub fn positions_f32(&self, p: &mut [V3]) {
+    pub fn positions_f32(&self, lane: usize, p: &mut [V3]) {
         for (o, v) in p.iter_mut().zip(&self.p) {
-            *o = [v[0] as f32, v[1] as f32, v[2] as f32];
+            *o = build(|c| v[c].lane(lane) as f32);
         }
     }
 
     /// One Newton-XPBD iteration: linearise every constraint at the current
     /// state, solve `(J W J^T + alpha~) dlambda = -(C + alpha~ lambda)`
-    /// exactly, apply `dx = W J^T dlambda`. Returns the largest residual
-    /// `|C + alpha~ lambda|` before the update (a convergence measure).
-    pub fn iterate(&mut self, input: &DirectInput<'_>) -> f64 {
+    /// exactly, apply `dx = W J^T dlambda`.
+    #[inline(always)]
+    pub fn iterate(&mut self) {
+        self.forward();
+        if let Some(solved) = self.backward() {
+            if (0..T::WIDTH).all(|i| solved.lane(i) > 0.0) {
+                // The usual case: every lane moves (the same values as
+                // selecting them).
+                self.apply(|new, _| new);
+            } else {
+                let zero = T::splat(0.0);
+                self.apply(|new, old| T::gt_select(solved, zero, new, old));
+            }
+        }
+    }
+
+    /// Builds each block of the system and eliminates it at once (block
+    /// Thomas algorithm with `L D L^T` factors, no square roots on the
+    /// sequential path): `D'_k = D_k - Z_{k-1}^T D_{k-1}^-1 Z_{k-1}`, `b'_k
+    /// = b_k - Z_{k-1}^T D_{k-1}^-1 L_{k-1}^-1 b'_{k-1}`, `Z_k = L_k^-1
+    /// U_k`.
+    #[inline(always)]
+    fn forward(&mut self) {
         let m = self.q.len();
-        let inv_dt2 = 1.0 / (input.dt as f64 * input.dt as f64);
-        let mut residual = 0.0f64;
-        // Jacobian pieces and right-hand sides.
         for k in 0..m {
+            let c = self.constants[k];
             let q = self.q[k];
             let d3 = tangent(q);
-            self.d3[k] = d3;
-            let l = input.l[k] as f64;
-            let c = &input.compliance[k];
-            let lam = self.lambda[k];
-            // Stretch/shear: C = p_{k+1} - p_k - l d3, compliance in world
-            // axes (shear across, stretch along d3).
-            let a_sh = c.shear * inv_dt2;
-            let a_st = c.stretch * inv_dt2;
-            let mut alpha_s = [[0.0; 3]; 3];
-            for (r, row) in alpha_s.iter_mut().enumerate() {
-                for (col, v) in row.iter_mut().enumerate() {
-                    let delta = if r == col { 1.0 } else { 0.0 };
-                    *v = a_sh * (delta - d3[r] * d3[col]) + a_st * d3[r] * d3[col];
-                }
+            let before = if k >= 1 { self.q[k - 1] } else { self.root };
+            let bend = bend_linearisation(before, q, c.rest, c.rest_w);
+            let g = bend.g;
+            let g_d3 = mul_av(&g, d3);
+            let (mut d, mut b) = self.diagonal_block(k, &c, d3, &bend, g_d3);
+            if k >= 1 {
+                self.eliminate_previous(k, &g, bend.g_before, &mut d, &mut b);
             }
-            let mut rhs = [0.0; 6];
-            for r in 0..3 {
-                let cs = self.p[k + 1][r] - self.p[k][r] - l * d3[r];
-                let mut al = 0.0;
-                for col in 0..3 {
-                    al += alpha_s[r][col] * lam[3 + col];
-                }
-                rhs[3 + r] = -(cs + al);
-            }
-            let mut block = [[0.0; 6]; 6];
-            let (a_b, a_t) = (c.bend * inv_dt2, c.twist * inv_dt2);
-            {
-                let (before, w_before) = if k >= 1 {
-                    (self.q[k - 1], input.w_q[k - 1] as f64)
-                } else {
-                    let r = input.root_frame;
-                    ([r[0] as f64, r[1] as f64, r[2] as f64, r[3] as f64], 0.0)
-                };
-                let (omega, g) = bend_linearisation(before, q, input.rest[k]);
-                self.g[k] = g;
-                let alpha_b = [a_b, a_b, a_t];
-                for r in 0..3 {
-                    rhs[r] = -(omega[r] - input.rest[k][r] as f64 + alpha_b[r] * lam[r]);
-                }
-                let mut w_sum = inverse_inertia(input, k, d3);
-                if w_before > 0.0 {
-                    let before_w = inverse_inertia(input, k - 1, self.d3[k - 1]);
-                    for r in 0..3 {
-                        for c in 0..3 {
-                            w_sum[r][c] += before_w[r][c];
-                        }
-                    }
-                }
-                let gwg = mul_abt(&mul_ab(&g, &w_sum), &g);
-                for r in 0..3 {
-                    for col in 0..3 {
-                        block[r][col] = gwg[r][col];
-                    }
-                    block[r][r] += alpha_b[r];
-                }
-                // B-S coupling through frame k: w_k G (l [d3]x)^T = -w_k l G [d3]x.
-                let wk = input.w_q[k] as f64;
-                let gx = mul_ab(&g, &skew(d3));
-                for r in 0..3 {
-                    for col in 0..3 {
-                        let v = -wk * l * gx[r][col];
-                        block[r][3 + col] = v;
-                        block[3 + col][r] = v;
-                    }
-                }
-            }
-            let (w0, w1, wq) = (
-                input.w[k] as f64,
-                input.w[k + 1] as f64,
-                input.w_q[k] as f64,
-            );
-            for r in 0..3 {
-                for col in 0..3 {
-                    let delta = if r == col { 1.0 } else { 0.0 };
-                    block[3 + r][3 + col] = (w0 + w1) * delta
-                        + wq * l * l * (delta - d3[r] * d3[col])
-                        + alpha_s[r][col];
-                }
-            }
-            for v in &rhs {
-                residual = residual.max(v.abs());
-            }
-            self.diag[k] = block;
-            self.rhs[k] = rhs;
-        }
-        // Couplings between block k and k + 1.
-        for k in 0..m.saturating_sub(1) {
-            let wq = input.w_q[k] as f64;
-            let wp = input.w[k + 1] as f64;
-            let l = input.l[k] as f64;
-            let g_next = self.g[k + 1];
-            let mut u = [[0.0; 6]; 6];
-            let w_k = inverse_inertia(input, k, self.d3[k]);
-            let bb = mul_abt(&mul_ab(&self.g[k], &w_k), &g_next);
-            for r in 0..3 {
-                for col in 0..3 {
-                    u[r][col] = -bb[r][col];
-                }
-            }
-            let sb = mul_abt(&skew(self.d3[k]), &g_next);
-            for r in 0..3 {
-                for col in 0..3 {
-                    u[3 + r][col] = -wq * l * sb[r][col];
-                }
-                u[3 + r][3 + r] = -wp;
-            }
-            self.upper[k] = u;
-        }
-        self.solve_tridiagonal();
-        // A solve that went non-finite (only from non-finite input) leaves
-        // the state as it is; the quarantine judges the strand.
-        if self.rhs.iter().flatten().all(|v| v.is_finite()) {
-            self.apply(input);
-        }
-        residual
-    }
-
-    /// Block Thomas algorithm on the symmetric block-tridiagonal system;
-    /// the solution replaces `rhs`.
-    fn solve_tridiagonal(&mut self) {
-        let m = self.diag.len();
-        for k in 0..m {
-            if k > 0 {
-                // D'_k = D_k - U_{k-1}^T Y_{k-1}; b'_k = b_k - U_{k-1}^T y_{k-1}.
-                let u = self.upper[k - 1];
-                let ym = self.y_mat[k - 1];
-                let yv = self.y_vec[k - 1];
-                let d = &mut self.diag[k];
-                let b = &mut self.rhs[k];
-                for r in 0..6 {
-                    for col in 0..6 {
-                        let mut s = 0.0;
-                        for i in 0..6 {
-                            s += u[i][r] * ym[i][col];
-                        }
-                        d[r][col] -= s;
-                    }
-                    let mut s = 0.0;
-                    for i in 0..6 {
-                        s += u[i][r] * yv[i];
-                    }
-                    b[r] -= s;
-                }
-            }
-            let chol = cholesky(&self.diag[k]);
-            self.y_vec[k] = chol_solve(&chol, &self.rhs[k]);
-            if k + 1 < m {
-                let u = self.upper[k];
-                let mut ym = [[0.0; 6]; 6];
-                for col in 0..6 {
-                    let column: V6 = std::array::from_fn(|r| u[r][col]);
-                    let x = chol_solve(&chol, &column);
-                    for r in 0..6 {
-                        ym[r][col] = x[r];
-                    }
-                }
-                self.y_mat[k] = ym;
-            }
-        }
-        // Back substitution: x_k = y_k - Y_k x_{k+1}.
-        for k in (0..m).rev() {
-            let mut x = self.y_vec[k];
-            if k + 1 < m {
-                let next = self.rhs[k + 1];
-                for (r, xr) in x.iter_mut().enumerate() {
-                    let mut s = 0.0;
-                    for (c, n) in next.iter().enumerate() {
-                        s += self.y_mat[k][r][c] * n;
-                    }
-                    *xr -= s;
-                }
-            }
-            self.rhs[k] = x;
+            let f = &mut self.factors[k];
+            f.d3 = d3;
+            f.g = g;
+            f.g_d3 = g_d3;
+            ldlt(&d, &mut f.unit, &mut f.inv);
+            f.t = forward_substitute(&f.unit, &f.inv, b);
         }
     }
 
-    /// `lambda += dlambda`, `dx = W J^T dlambda`.
-    fn apply(&mut self, input: &DirectInput<'_>) {
+    /// Block `k`'s diagonal block (lower triangle) and right-hand side.
+    #[inline(always)]
+    fn diagonal_block(
+        &self,
+        k: usize,
+        c: &Constants<T>,
+        d3: D3<T>,
+        bend: &Bend<T>,
+        g_d3: D3<T>,
+    ) -> ([D6<T>; 6], D6<T>) {
+        let zero = T::splat(0.0);
+        let mut d = [[zero; 6]; 6];
+        // Bend/bend: G (W_k + W_{k-1}) G^T with W = w_q I + (w_twist -
+        // w_q) d3 d3^T, G G^T = A A^T (R1 is a rotation).
+        let wq_sum = c.wq + c.wq_before;
+        let gb = bend.g_before;
+        for r in 0..3 {
+            for col in 0..=r {
+                d[r][col] = wq_sum * bend.gg[r][col]
+                    + c.dw * g_d3[r] * g_d3[col]
+                    + c.dw_before * gb[r] * gb[col];
+            }
+        }
+        d[0][0] = d[0][0] + c.a_b;
+        d[1][1] = d[1][1] + c.a_b;
+        d[2][2] = d[2][2] + c.a_t;
+        // Stretch/bend through frame k: G W_k (l [d3]x)^T = -w_q l G [d3]x,
+        // whose row r is -w_q l (g_r x d3).
+        let wql = c.wq * c.l;
+        for r in 0..3 {
+            let x = cross(bend.g[r], d3);
+            for s in 0..3 {
+                d[3 + s][r] = -(wql * x[s]);
+            }
+        }
+        // Stretch/stretch: (w_k + w_{k+1}) I + w_q l^2 (I - d3 d3^T) +
+        // alpha_shear (I - d3 d3^T) + alpha_stretch d3 d3^T.
+        let wql2 = wql * c.l;
+        let c1 = c.w_pair + wql2 + c.a_sh;
+        let c2 = c.a_st - c.a_sh - wql2;
+        for r in 0..3 {
+            for col in 0..=r {
+                d[3 + r][3 + col] = c2 * d3[r] * d3[col];
+            }
+            d[3 + r][3 + r] = d[3 + r][3 + r] + c1;
+        }
+        // Right-hand side -(C + alpha~ lambda).
+        let lam = self.lambda[k];
+        let mut b = [zero; 6];
+        let alpha_b = [c.a_b, c.a_b, c.a_t];
+        for r in 0..3 {
+            b[r] = -(bend.omega[r] - c.rest[r] + alpha_b[r] * lam[r]);
+        }
+        let along = d3[0] * lam[3] + d3[1] * lam[4] + d3[2] * lam[5];
+        let a_diff = c.a_st - c.a_sh;
+        let (p0, p1) = (self.p[k], self.p[k + 1]);
+        for r in 0..3 {
+            let cs = p1[r] - p0[r] - c.l * d3[r];
+            let al = c.a_sh * lam[3 + r] + a_diff * d3[r] * along;
+            b[3 + r] = -(cs + al);
+        }
+        (d, b)
+    }
+
+    /// The coupling `U` of block `k - 1` to block `k`, `Z = L^-1 U` with
+    /// block `k - 1`'s factor, and its elimination from block `k`.
+    #[inline(always)]
+    fn eliminate_previous(
+        &mut self,
+        k: usize,
+        g: &M3<T>,
+        g_before: D3<T>,
+        d: &mut [D6<T>; 6],
+        b: &mut D6<T>,
+    ) {
+        let zero = T::splat(0.0);
+        let cp = self.constants[k - 1];
+        let fp = &mut self.factors[k - 1];
+        // Bend k-1 / bend k through frame k-1: -G_{k-1} W_{k-1} G_k^T.
+        let mut au = [[zero; 3]; 3];
+        for r in 0..3 {
+            for col in 0..3 {
+                let gg = fp.g[r][0] * g[col][0] + fp.g[r][1] * g[col][1] + fp.g[r][2] * g[col][2];
+                au[r][col] = -(cp.wq * gg + cp.dw * fp.g_d3[r] * g_before[col]);
+            }
+        }
+        // Stretch k-1 / bend k: -w_q l [d3]x G_k^T, column c = d3 x g_c.
+        let mut bm = [[zero; 3]; 3];
+        let wql = cp.wq * cp.l;
+        for col in 0..3 {
+            let x = cross(fp.d3, g[col]);
+            for r in 0..3 {
+                bm[r][col] = -(wql * x[r]);
+            }
+        }
+        // Stretch k-1 / stretch k share vertex k: -w_k I (bottom right).
+        let l = &fp.unit;
+        let inv = fp.inv;
+        let mut z_tl = [[zero; 3]; 3];
+        let mut z_bl = [[zero; 3]; 3];
+        let mut z_br = [[zero; 3]; 3];
+        for col in 0..3 {
+            for i in 0..3 {
+                let mut s = au[i][col];
+                for j in 0..i {
+                    s = s - l[(i, j)] * z_tl[j][col];
+                }
+                z_tl[i][col] = s;
+            }
+            for i in 0..3 {
+                let mut s = bm[i][col];
+                for j in 0..3 {
+                    s = s - l[(3 + i, j)] * z_tl[j][col];
+                }
+                for j in 0..i {
+                    s = s - l[(3 + i, 3 + j)] * z_bl[j][col];
+                }
+                z_bl[i][col] = s;
+            }
+            // Rows above the diagonal stay zero.
+            z_br[col][col] = -cp.w_next;
+            for i in col + 1..3 {
+                let mut s = zero;
+                for j in col..i {
+                    s = s - l[(3 + i, 3 + j)] * z_br[j][col];
+                }
+                z_br[i][col] = s;
+            }
+        }
+        // D^-1 Z.
+        let scale =
+            |z: &M3<T>, first: usize| build::<D3<T>, 3>(|r| build(|c| z[r][c] * inv[first + r]));
+        let (s_tl, s_bl, s_br) = (scale(&z_tl, 0), scale(&z_bl, 3), scale(&z_br, 3));
+        // D -= Z^T D^-1 Z (lower triangle), b -= Z^T (D^-1 L^-1 b').
+        for i in 0..3 {
+            for j in 0..=i {
+                let mut s = zero;
+                for r in 0..3 {
+                    s = s + z_tl[r][i] * s_tl[r][j];
+                }
+                for r in 0..3 {
+                    s = s + z_bl[r][i] * s_bl[r][j];
+                }
+                d[i][j] = d[i][j] - s;
+            }
+            for j in 0..3 {
+                let mut s = zero;
+                for r in i..3 {
+                    s = s + z_br[r][i] * s_bl[r][j];
+                }
+                d[3 + i][j] = d[3 + i][j] - s;
+            }
+            for j in 0..=i {
+                let mut s = zero;
+                for r in i..3 {
+                    s = s + z_br[r][i] * s_br[r][j];
+                }
+                d[3 + i][3 + j] = d[3 + i][3 + j] - s;
+            }
+        }
+        let t = fp.t;
+        for i in 0..3 {
+            let mut s = zero;
+            for r in 0..3 {
+                s = s + z_tl[r][i] * t[r];
+            }
+            for r in 0..3 {
+                s = s + z_bl[r][i] * t[3 + r];
+            }
+            b[i] = b[i] - s;
+            let mut s = zero;
+            for r in i..3 {
+                s = s + z_br[r][i] * t[3 + r];
+            }
+            b[3 + i] = b[3 + i] - s;
+        }
+        fp.z_tl = s_tl;
+        fp.z_bl = s_bl;
+        fp.z_br = s_br;
+    }
+
+    /// Back substitution `x_k = L^-T (D^-1 L^-1 b'_k - D^-1 Z_k x_{k+1})`
+    /// into `t`. Returns
+    /// per lane 1 where the whole solution is finite, 0 where not (only from
+    /// non-finite input; such a lane is left as it is for the quarantine to
+    /// judge), or `None` when no lane is finite.
+    #[inline(always)]
+    fn backward(&mut self) -> Option<T> {
         let m = self.q.len();
+        let zero = T::splat(0.0);
+        let mut probe = zero;
+        let mut next = [zero; 6];
+        for k in (0..m).rev() {
+            let f = &mut self.factors[k];
+            let mut y = f.t;
+            if k + 1 < m {
+                for r in 0..3 {
+                    let mut s = zero;
+                    for j in 0..3 {
+                        s = s + f.z_tl[r][j] * next[j];
+                    }
+                    y[r] = y[r] - s;
+                    let mut s = zero;
+                    for j in 0..3 {
+                        s = s + f.z_bl[r][j] * next[j];
+                    }
+                    for j in 0..=r {
+                        s = s + f.z_br[r][j] * next[3 + j];
+                    }
+                    y[3 + r] = y[3 + r] - s;
+                }
+            }
+            let mut x = [zero; 6];
+            for i in (0..6).rev() {
+                let mut s = y[i];
+                for j in i + 1..6 {
+                    s = s - f.unit[(j, i)] * x[j];
+                }
+                x[i] = s;
+            }
+            // x * 0 is 0 for finite x, NaN otherwise.
+            for v in x {
+                probe = probe + v * zero;
+            }
+            f.t = x;
+            next = x;
+        }
+        let one = T::splat(1.0);
+        let solved = T::eq_select(probe, zero, one, zero);
+        (0..T::WIDTH)
+            .any(|i| solved.lane(i) > 0.0)
+            .then_some(solved)
+    }
+
+    /// `lambda += dlambda`, `dx = W J^T dlambda`; `keep(new, old)` picks
+    /// per lane (the old value where the solve was not finite).
+    #[inline(always)]
+    fn apply(&mut self, keep: impl Fn(T, T) -> T) {
+        let m = self.q.len();
+        let zero = T::splat(0.0);
         for k in 0..m {
-            let dl = self.rhs[k];
-            for (lam, d) in self.lambda[k].iter_mut().zip(&dl) {
-                *lam += d;
+            let dl = self.factors[k].t;
+            let lam = &mut self.lambda[k];
+            for i in 0..6 {
+                lam[i] = keep(lam[i] + dl[i], lam[i]);
             }
         }
         for i in 0..=m {
-            let w = input.w[i] as f64;
-            if w == 0.0 {
-                continue;
-            }
-            // S_{i-1} has +I on p_i, S_i has -I.
-            let mut d = [0.0; 3];
+            let w = self.w[i];
+            // Stretch i-1 has +I on p_i, stretch i has -I.
+            let mut d = [zero; 3];
             if i >= 1 {
-                for (c, dc) in d.iter_mut().enumerate() {
-                    *dc += self.rhs[i - 1][3 + c];
-                }
+                let t = &self.factors[i - 1].t;
+                d = [t[3], t[4], t[5]];
             }
             if i < m {
-                for (c, dc) in d.iter_mut().enumerate() {
-                    *dc -= self.rhs[i][3 + c];
-                }
+                let t = &self.factors[i].t;
+                d = [d[0] - t[3], d[1] - t[4], d[2] - t[5]];
             }
+            let p = &mut self.p[i];
             for c in 0..3 {
-                self.p[i][c] += w * d[c];
+                let moved = T::gt_select(w, zero, p[c] + w * d[c], p[c]);
+                p[c] = keep(moved, p[c]);
             }
         }
+        let half = T::splat(0.5);
+        let max_turn = T::splat(MAX_TURN);
         for e in 0..m {
-            let w = input.w_q[e] as f64;
-            if w == 0.0 {
-                continue;
-            }
-            let l = input.l[e] as f64;
-            let ds: D3 = [self.rhs[e][3], self.rhs[e][4], self.rhs[e][5]];
-            // (l [d3]x)^T ds = l ds x d3.
-            let mut t = scale3(cross3(ds, self.d3[e]), l);
-            let db: D3 = [self.rhs[e][0], self.rhs[e][1], self.rhs[e][2]];
-            t = add3(t, mul_at_v(&self.g[e], db));
+            let c = &self.constants[e];
+            let f = &self.factors[e];
+            let (d3, dl) = (f.d3, f.t);
+            // (l [d3]x)^T ds = l ds x d3; G_e^T db_e - G_{e+1}^T db_{e+1}.
+            let ds_d3 = cross([dl[3], dl[4], dl[5]], d3);
+            let mut t: D3<T> = build(|r| ds_d3[r] * c.l);
+            let gt = mul_at_v(&f.g, [dl[0], dl[1], dl[2]]);
+            t = [t[0] + gt[0], t[1] + gt[1], t[2] + gt[2]];
             if e + 1 < m {
-                let db: D3 = [self.rhs[e + 1][0], self.rhs[e + 1][1], self.rhs[e + 1][2]];
-                t = sub3(t, mul_at_v(&self.g[e + 1], db));
+                let f1 = &self.factors[e + 1];
+                let gt = mul_at_v(&f1.g, [f1.t[0], f1.t[1], f1.t[2]]);
+                t = [t[0] - gt[0], t[1] - gt[1], t[2] - gt[2]];
             }
-            let mut dtheta = mul_av(&inverse_inertia(input, e, self.d3[e]), t);
+            // W t = w_q t + (w_twist - w_q) d3 (d3 . t).
+            let along = c.dw * (d3[0] * t[0] + d3[1] * t[1] + d3[2] * t[2]);
+            let mut dtheta: D3<T> = build(|r| c.wq * t[r] + along * d3[r]);
             // The linearisation holds for small turns: a frame that must
             // turn far in one step (a kinematic target jumping) gets there
             // over several iterations and steps instead of overshooting.
-            let turn = dot3(dtheta, dtheta).sqrt();
-            if turn > MAX_TURN {
-                dtheta = scale3(dtheta, MAX_TURN / turn);
-            }
+            let turn =
+                (dtheta[0] * dtheta[0] + dtheta[1] * dtheta[1] + dtheta[2] * dtheta[2]).sqrt();
+            let scale = max_turn / turn;
+            dtheta = build(|r| T::gt_select(turn, max_turn, dtheta[r] * scale, dtheta[r]));
             let q = self.q[e];
             // q += 1/2 (dtheta, 0) q, renormalised.
-            let s = qmul_d([dtheta[0], dtheta[1], dtheta[2], 0.0], q);
-            let n = [
-                q[0] + 0.5 * s[0],
-                q[1] + 0.5 * s[1],
-                q[2] + 0.5 * s[2],
-                q[3] + 0.5 * s[3],
-            ];
+            let s = qmul([dtheta[0], dtheta[1], dtheta[2], zero], q);
+            let n: [T; 4] = build(|i| q[i] + half * s[i]);
             let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] + n[3] * n[3]).sqrt();
-            self.q[e] = if len > 0.0 {
-                [n[0] / len, n[1] / len, n[2] / len, n[3] / len]
-            } else {
-                q
-            };
+            let turned: [T; 4] = build(|i| T::gt_select(len, zero, n[i] / len, q[i]));
+            self.q[e] = build(|i| keep(T::gt_select(c.wq, zero, turned[i], q[i]), q[i]));
         }
     }
+}
+
+impl Direct<F64x4> {
+    /// `iterate` on four strands, with AVX2 where the CPU has it (the
+    /// same operations in wider registers; no FMA).
+    pub fn iterate_lanes(&mut self) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { self.iterate_avx2() };
+            return;
+        }
+        self.iterate();
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn iterate_avx2(&mut self) {
+        self.iterate();
+    }
+}
+
+/// The bend/twist linearisation of one joint.
+struct Bend<T> {
+    /// The Darboux vector, as the representative nearest the rest.
+    omega: D3<T>,
+    /// Its derivative with respect to a world rotation of the second frame
+    /// (the negative for the first): `G = A R1^T`, `A = 1/2 (w I -
+    /// [Omega]x)`.
+    g: M3<T>,
+    /// `G G^T = A A^T = 1/4 ((w^2 + |Omega|^2) I - Omega Omega^T)`.
+    gg: M3<T>,
+    /// `G d3_1 = A e_z` (the first frame's tangent is `R1 e_z`).
+    g_before: D3<T>,
 }
 
 /// The Darboux vector of frames `q1`, `q2` as the representative nearest
 /// the rest (the double cover, METHOD A: the 4D test on the full Darboux
-/// quaternion) and its derivative with respect to a world rotation of `q2`
-/// (the negative for `q1`): `G = 1/2 (w I - [Omega]x) R1^T`.
-fn bend_linearisation(q1: [f64; 4], q2: [f64; 4], rest: V3) -> (D3, M3) {
-    let d = qmul_d(conj_d(q1), q2);
-    let rest = [rest[0] as f64, rest[1] as f64, rest[2] as f64];
-    let rest_w = (1.0 - dot3(rest, rest)).max(0.0).sqrt();
-    let sign = if dot3([d[0], d[1], d[2]], rest) + d[3] * rest_w < 0.0 {
-        -1.0
-    } else {
-        1.0
-    };
-    let omega = [sign * d[0], sign * d[1], sign * d[2]];
+/// quaternion) and its derivative.
+#[inline(always)]
+fn bend_linearisation<T: Real>(q1: [T; 4], q2: [T; 4], rest: D3<T>, rest_w: T) -> Bend<T> {
+    let d = qmul(conj(q1), q2);
+    let zero = T::splat(0.0);
+    let one = T::splat(1.0);
+    let test = d[0] * rest[0] + d[1] * rest[1] + d[2] * rest[2] + d[3] * rest_w;
+    let sign = T::lt_select(test, zero, -one, one);
+    let o = [sign * d[0], sign * d[1], sign * d[2]];
     let w = sign * d[3];
-    let r1t = transpose(rotation_matrix(q1));
-    let mut a = [[0.0; 3]; 3];
-    let so = skew(omega);
+    let h = T::splat(0.5);
+    let (hw, hx, hy, hz) = (h * w, h * o[0], h * o[1], h * o[2]);
+    let a = [[hw, hz, -hy], [-hz, hw, hx], [hy, -hx, hw]];
+    let r1 = rotation_matrix(q1);
+    // G = A R1^T.
+    let mut g = [[zero; 3]; 3];
     for r in 0..3 {
         for c in 0..3 {
-            a[r][c] = 0.5 * ((if r == c { w } else { 0.0 }) - so[r][c]);
+            g[r][c] = a[r][0] * r1[c][0] + a[r][1] * r1[c][1] + a[r][2] * r1[c][2];
         }
     }
-    (omega, mul_ab(&a, &r1t))
+    let n2 = w * w + (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]);
+    let quarter = T::splat(0.25);
+    let mut gg = [[zero; 3]; 3];
+    for r in 0..3 {
+        for c in 0..3 {
+            let outer = o[r] * o[c];
+            gg[r][c] = quarter * if r == c { n2 - outer } else { -outer };
+        }
+    }
+    Bend {
+        omega: o,
+        g,
+        gg,
+        g_before: [-hy, hx, hw],
+    }
 }
 
-/// The world inverse inertia of frame `k` with tangent `d3`:
-/// `w_q (I - d3 d3^T) + w_twist d3 d3^T`.
-fn inverse_inertia(input: &DirectInput<'_>, k: usize, d3: D3) -> M3 {
-    let (wb, wt) = (input.w_q[k] as f64, input.w_twist[k] as f64);
-    std::array::from_fn(|r| {
-        std::array::from_fn(|c| {
-            let delta = if r == c { 1.0 } else { 0.0 };
-            wb * delta + (wt - wb) * d3[r] * d3[c]
-        })
-    })
-}
-
-/// `a v`.
-fn mul_av(a: &M3, v: D3) -> D3 {
-    std::array::from_fn(|r| (0..3).map(|i| a[r][i] * v[i]).sum())
-}
-
-/// Cholesky factor (lower) of a symmetric positive definite 6x6 block. A
-/// non-positive pivot (only from non-finite input) gives a unit pivot so
-/// the quarantine sees the NaN rather than a panic.
-fn cholesky(a: &M6) -> M6 {
-    let mut l = [[0.0; 6]; 6];
+/// `L D L^T` factor of a symmetric positive definite 6x6 block given by
+/// its lower triangle: `L` unit lower (below the diagonal) and `D^-1`. A
+/// non-positive pivot (only from non-finite input) becomes 1 so the
+/// quarantine sees the NaN rather than a panic.
+#[inline(always)]
+fn ldlt<T: Real>(a: &[D6<T>; 6], l: &mut Unit<T>, inv: &mut D6<T>) {
+    let zero = T::splat(0.0);
+    let one = T::splat(1.0);
+    // Row i of L D, below the diagonal.
+    let mut ld = [zero; 6];
     for i in 0..6 {
-        for j in 0..=i {
+        for j in 0..i {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= l[i][k] * l[j][k];
+                s = s - ld[k] * l[(j, k)];
             }
-            if i == j {
-                l[i][i] = if s > 0.0 { s.sqrt() } else { 1.0 };
-            } else {
-                l[i][j] = s / l[j][j];
-            }
+            ld[j] = s;
+            l[(i, j)] = s * inv[j];
         }
+        let mut s = a[i][i];
+        for k in 0..i {
+            s = s - ld[k] * l[(i, k)];
+        }
+        inv[i] = one / T::gt_select(s, zero, s, one);
     }
-    l
 }
 
-fn chol_solve(l: &M6, b: &V6) -> V6 {
-    let mut y = [0.0; 6];
+/// `D^-1 L^-1 b`.
+#[inline(always)]
+fn forward_substitute<T: Real>(l: &Unit<T>, inv: &D6<T>, b: D6<T>) -> D6<T> {
+    let mut y = b;
     for i in 0..6 {
         let mut s = b[i];
         for k in 0..i {
-            s -= l[i][k] * y[k];
+            s = s - l[(i, k)] * y[k];
         }
-        y[i] = s / l[i][i];
+        y[i] = s;
     }
-    let mut x = [0.0; 6];
-    for i in (0..6).rev() {
-        let mut s = y[i];
-        for k in i + 1..6 {
-            s -= l[k][i] * x[k];
-        }
-        x[i] = s / l[i][i];
-    }
-    x
+    build(|i| y[i] * inv[i])
 }
 
-fn tangent(q: [f64; 4]) -> D3 {
+#[inline(always)]
+fn tangent<T: Real>(q: [T; 4]) -> D3<T> {
     let [x, y, z, w] = q;
+    let two = T::splat(2.0);
     [
-        2.0 * (x * z + w * y),
-        2.0 * (y * z - w * x),
-        1.0 - 2.0 * (x * x + y * y),
+        two * (x * z + w * y),
+        two * (y * z - w * x),
+        T::splat(1.0) - two * (x * x + y * y),
     ]
 }
 
-fn rotation_matrix(q: [f64; 4]) -> M3 {
+#[inline(always)]
+fn rotation_matrix<T: Real>(q: [T; 4]) -> M3<T> {
     let [x, y, z, w] = q;
+    let one = T::splat(1.0);
+    let two = T::splat(2.0);
     [
         [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
+            one - two * (y * y + z * z),
+            two * (x * y - w * z),
+            two * (x * z + w * y),
         ],
         [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
+            two * (x * y + w * z),
+            one - two * (x * x + z * z),
+            two * (y * z - w * x),
         ],
         [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
+            two * (x * z - w * y),
+            two * (y * z + w * x),
+            one - two * (x * x + y * y),
         ],
     ]
 }
 
-fn qmul_d(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+#[inline(always)]
+fn qmul<T: Real>(a: [T; 4], b: [T; 4]) -> [T; 4] {
     [
         a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
         a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
@@ -513,52 +743,45 @@ fn qmul_d(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
     ]
 }
 
-fn conj_d(q: [f64; 4]) -> [f64; 4] {
+#[inline(always)]
+fn conj<T: Real>(q: [T; 4]) -> [T; 4] {
     [-q[0], -q[1], -q[2], q[3]]
 }
 
-fn skew(v: D3) -> M3 {
-    [[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]]
-}
-
-fn transpose(a: M3) -> M3 {
-    std::array::from_fn(|r| std::array::from_fn(|c| a[c][r]))
-}
-
-fn mul_ab(a: &M3, b: &M3) -> M3 {
-    std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|i| a[r][i] * b[i][c]).sum()))
-}
-
-/// `a b^T`.
-fn mul_abt(a: &M3, b: &M3) -> M3 {
-    std::array::from_fn(|r| std::array::from_fn(|c| (0..3).map(|i| a[r][i] * b[c][i]).sum()))
+/// `a v`.
+#[inline(always)]
+fn mul_av<T: Real>(a: &M3<T>, v: D3<T>) -> D3<T> {
+    build(|r| a[r][0] * v[0] + a[r][1] * v[1] + a[r][2] * v[2])
 }
 
 /// `a^T v`.
-fn mul_at_v(a: &M3, v: D3) -> D3 {
-    std::array::from_fn(|c| (0..3).map(|i| a[i][c] * v[i]).sum())
+#[inline(always)]
+fn mul_at_v<T: Real>(a: &M3<T>, v: D3<T>) -> D3<T> {
+    build(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
 }
 
-fn dot3(a: D3, b: D3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+/// Lane `i` of a number from strand `i`.
+#[inline(always)]
+fn gather<T: Real>(strands: &[DirectInput<'_>], get: impl Fn(&DirectInput<'_>) -> f64) -> T {
+    T::gather(|i| get(&strands[i]))
 }
 
-fn cross3(a: D3, b: D3) -> D3 {
+/// `[f(0), .., f(N - 1)]`, always inlined (`array::map` and `from_fn`
+/// were not, in the hot loop).
+#[inline(always)]
+fn build<U: Copy + Default, const N: usize>(mut f: impl FnMut(usize) -> U) -> [U; N] {
+    let mut out = [U::default(); N];
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = f(i);
+    }
+    out
+}
+
+#[inline(always)]
+fn cross<T: Real>(a: D3<T>, b: D3<T>) -> D3<T> {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-fn scale3(a: D3, s: f64) -> D3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-
-fn add3(a: D3, b: D3) -> D3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn sub3(a: D3, b: D3) -> D3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }

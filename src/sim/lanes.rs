@@ -6,6 +6,7 @@
 use super::constraints::{
     StretchCoefficients, BEND_DEADBAND2, LENGTH_DEADBAND, NEWTON_RANGE, STRETCH_DEADBAND2,
 };
+use super::direct::Direct;
 use super::math::{Quat, V3};
 use std::ops::{Add, Mul, Neg, Sub};
 
@@ -248,6 +249,8 @@ pub struct Group {
     w: Vec<F4>,
     l: Vec<F4>,
     corrections: Vec<P4>,
+    /// The physical model's direct solve of the four strands.
+    pub direct: Direct<F64x4>,
 }
 
 /// What the group reads from one strand's working copy.
@@ -381,5 +384,175 @@ impl Group {
         }
         self.p[m] = p_a;
         self.q[m - 1] = q_prev;
+    }
+}
+
+/// A number of the physical model's direct solve: `f64` for one strand,
+/// [`F64x4`] for four strands in lanes. Both do the same IEEE
+/// operations in the same order (no fused multiply-add, branches become
+/// selects), so a strand's result does not depend on the path.
+pub trait Real:
+    Copy
+    + Default
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// Strands per number.
+    const WIDTH: usize;
+    fn splat(v: f64) -> Self;
+    /// Lane `i` from `f(i)`.
+    fn gather(f: impl FnMut(usize) -> f64) -> Self;
+    fn lane(self, i: usize) -> f64;
+    fn sqrt(self) -> Self;
+    /// `if a > b { x } else { y }`, per lane.
+    fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self;
+    /// `if a < b { x } else { y }`, per lane.
+    fn lt_select(a: Self, b: Self, x: Self, y: Self) -> Self;
+    /// `if a == b { x } else { y }`, per lane.
+    fn eq_select(a: Self, b: Self, x: Self, y: Self) -> Self;
+}
+
+impl Real for f64 {
+    const WIDTH: usize = 1;
+    #[inline(always)]
+    fn splat(v: f64) -> f64 {
+        v
+    }
+    #[inline(always)]
+    fn gather(mut f: impl FnMut(usize) -> f64) -> f64 {
+        f(0)
+    }
+    #[inline(always)]
+    fn lane(self, _: usize) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn gt_select(a: f64, b: f64, x: f64, y: f64) -> f64 {
+        if a > b {
+            x
+        } else {
+            y
+        }
+    }
+    #[inline(always)]
+    fn lt_select(a: f64, b: f64, x: f64, y: f64) -> f64 {
+        if a < b {
+            x
+        } else {
+            y
+        }
+    }
+    #[inline(always)]
+    fn eq_select(a: f64, b: f64, x: f64, y: f64) -> f64 {
+        if a == b {
+            x
+        } else {
+            y
+        }
+    }
+}
+
+/// Four `f64` lanes of the physical model's solve. Plain arrays rather
+/// than `wide::f64x4`: wide picks its instructions when the crate is
+/// compiled (SSE2 in the portable x86-64 build), while these element-wise
+/// operations also compile to AVX inside the solve's copy built with
+/// `#[target_feature(enable = "avx2")]` and chosen at run time
+/// (`Direct::iterate_lanes`). Either way each lane does the IEEE operation
+/// of the scalar code (no FMA), so the results are the same bits.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(align(32))]
+pub struct F64x4(pub [f64; LANES]);
+
+impl F64x4 {
+    #[inline(always)]
+    fn zip(self, o: F64x4, f: impl Fn(f64, f64) -> f64) -> F64x4 {
+        let (a, b) = (self.0, o.0);
+        F64x4([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
+    }
+    #[inline(always)]
+    fn each(self, f: impl Fn(f64) -> f64) -> F64x4 {
+        let a = self.0;
+        F64x4([f(a[0]), f(a[1]), f(a[2]), f(a[3])])
+    }
+    #[inline(always)]
+    fn select(a: F64x4, b: F64x4, x: F64x4, y: F64x4, test: impl Fn(f64, f64) -> bool) -> F64x4 {
+        let pick = |i: usize| if test(a.0[i], b.0[i]) { x.0[i] } else { y.0[i] };
+        F64x4([pick(0), pick(1), pick(2), pick(3)])
+    }
+}
+
+impl Add for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn add(self, o: F64x4) -> F64x4 {
+        self.zip(o, |a, b| a + b)
+    }
+}
+impl Sub for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn sub(self, o: F64x4) -> F64x4 {
+        self.zip(o, |a, b| a - b)
+    }
+}
+impl Mul for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn mul(self, o: F64x4) -> F64x4 {
+        self.zip(o, |a, b| a * b)
+    }
+}
+impl std::ops::Div for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn div(self, o: F64x4) -> F64x4 {
+        self.zip(o, |a, b| a / b)
+    }
+}
+impl Neg for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn neg(self) -> F64x4 {
+        self.each(|a| -a)
+    }
+}
+
+impl Real for F64x4 {
+    const WIDTH: usize = LANES;
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        F64x4([v; LANES])
+    }
+    #[inline(always)]
+    fn gather(mut f: impl FnMut(usize) -> f64) -> Self {
+        F64x4([f(0), f(1), f(2), f(3)])
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f64 {
+        self.0[i]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.each(f64::sqrt)
+    }
+    #[inline(always)]
+    fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+        F64x4::select(a, b, x, y, |a, b| a > b)
+    }
+    #[inline(always)]
+    fn lt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+        F64x4::select(a, b, x, y, |a, b| a < b)
+    }
+    #[inline(always)]
+    fn eq_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+        F64x4::select(a, b, x, y, |a, b| a == b)
     }
 }

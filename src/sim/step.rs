@@ -96,7 +96,7 @@ struct Work {
     v: Vec<V3>,
     omega: Vec<V3>,
     compliance: Vec<EdgeCompliance>,
-    direct: Direct,
+    direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
 }
@@ -429,8 +429,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             };
             work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
         }
-        work.stretch[e] =
-            StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
+        if ctx.physical.is_none() {
+            work.stretch[e] =
+                StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
+        }
     }
 
     if let Some(physical) = ctx.physical {
@@ -440,7 +442,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     // Bond-rate changes and (iii) the rest shape from the bonds (15).
     for j in 1..m {
         let joint = &s.joints[j];
-        work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
+        if ctx.physical.is_none() {
+            // The paper model's sweep coefficients.
+            work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
+        }
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
         let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
@@ -613,26 +618,76 @@ impl Work {
     /// with collisions after each.
     fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
         let m = n - 1;
-        self.direct.begin(&self.p[..n], &self.q[..m]);
+        // Taken out so the solve can borrow the rest of the working copy.
+        let mut direct = std::mem::take(&mut self.direct);
+        direct.begin(&[direct_input(self, n, ctx.dt)]);
         for _ in 0..ctx.iterations {
-            self.direct.iterate(&DirectInput {
-                w: &self.w[..n],
-                w_q: &self.w_q[..m],
-                w_twist: &self.w_twist[..m],
-                l: &self.l[..m],
-                rest: &self.rest[..m],
-                compliance: &self.compliance[..m],
-                root_frame: self.root_frame,
-                dt: ctx.dt,
-            });
+            direct.iterate();
             if !ctx.colliders.is_empty() {
-                self.direct.positions_f32(&mut self.p[..n]);
+                direct.positions_f32(0, &mut self.p[..n]);
                 self.collide(ctx, n);
-                self.direct.set_positions(&self.p[..n]);
+                direct.set_positions(0, &self.p[..n]);
             }
         }
-        self.direct.end(&mut self.p[..n], &mut self.q[..m]);
+        direct.end(0, &mut self.p[..n], &mut self.q[..m]);
+        self.direct = direct;
     }
+}
+
+/// What the direct solve reads of one strand's working copy.
+fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
+    let m = n - 1;
+    DirectInput {
+        p: &work.p[..n],
+        q: &work.q[..m],
+        w: &work.w[..n],
+        w_q: &work.w_q[..m],
+        w_twist: &work.w_twist[..m],
+        l: &work.l[..m],
+        rest: &work.rest[..m],
+        compliance: &work.compliance[..m],
+        root_frame: work.root_frame,
+        dt,
+    }
+}
+
+/// The physical model's step of four uniform strands: the direct solve in
+/// `f64` lanes (bit-identical to `solve_direct` on each), collisions and
+/// the rest per strand. Returns the failed ones.
+fn step_group_direct(
+    ctx: &Context<'_>,
+    strands: Vec<StrandMut<'_>>,
+    works: &mut [Work; LANES],
+    group: &mut Group,
+) -> Vec<usize> {
+    let n = strands[0].positions.len();
+    let m = n - 1;
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        prepare(ctx, s, work);
+    }
+    let direct = &mut group.direct;
+    direct.begin(&std::array::from_fn::<_, LANES, _>(|lane| {
+        direct_input(&works[lane], n, ctx.dt)
+    }));
+    for _ in 0..ctx.iterations {
+        direct.iterate_lanes();
+        if !ctx.colliders.is_empty() {
+            for (lane, work) in works.iter_mut().enumerate() {
+                direct.positions_f32(lane, &mut work.p[..n]);
+                work.collide(ctx, n);
+                direct.set_positions(lane, &work.p[..n]);
+            }
+        }
+    }
+    let mut failed = Vec::new();
+    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+        direct.end(lane, &mut work.p[..n], &mut work.q[..m]);
+        let index = s.index;
+        if !finish(ctx, s, work, false) {
+            failed.push(index);
+        }
+    }
+    failed
 }
 
 /// Four strands' steps with their constraint sweeps in SIMD lanes when
@@ -646,7 +701,6 @@ fn step_group(
 ) -> Vec<usize> {
     let n = strands.first().map_or(0, |s| s.positions.len());
     let uniform = ctx.simd
-        && ctx.physical.is_none()
         && strands.len() == LANES
         && n >= 2
         && strands.iter().all(|s| s.active && s.positions.len() == n);
@@ -659,6 +713,9 @@ fn step_group(
             }
         }
         return failed;
+    }
+    if ctx.physical.is_some() {
+        return step_group_direct(ctx, strands, works, group);
     }
     for (s, work) in strands.iter().zip(works.iter_mut()) {
         prepare(ctx, s, work);

@@ -764,6 +764,17 @@ fn bad_input_is_refused_with_a_reason() {
 
 #[test]
 fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
+    // SIMD groups run the paper model's sweep in f32 lanes.
+    assert_groups_match_strands_alone(&paper(), 80);
+}
+
+#[test]
+fn physical_simd_groups_match_strands_stepped_alone_bit_for_bit() {
+    // And the physical model's direct solve in f64x4 lanes.
+    assert_groups_match_strands_alone(&Material::default(), 40);
+}
+
+fn assert_groups_match_strands_alone(material: &Material, steps: usize) {
     // Mixed lengths (13 strands of 25, 24 and 23 vertices: sorted into three
     // uniform groups and one single) plus every force.
     let mut strands = Vec::new();
@@ -779,8 +790,7 @@ fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
         strands.push(strand[..strand.len() - i % 3].to_vec());
     }
     let groom = metres(Groom::from_strands(&strands));
-    // SIMD groups run the paper model's sweep.
-    let mut grouped_set = StrandSet::from_groom(&groom, &paper()).unwrap();
+    let mut grouped_set = StrandSet::from_groom(&groom, material).unwrap();
     let mut alone_set = grouped_set.clone();
     let parameters = SolverParameters {
         hair_radius: 1e-3,
@@ -802,7 +812,7 @@ fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
         bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
         ..Environment::default()
     };
-    for _ in 0..80 {
+    for _ in 0..steps {
         grouped.step(&mut grouped_set, &colliders, &env).unwrap();
         alone.step(&mut alone_set, &colliders, &env).unwrap();
     }

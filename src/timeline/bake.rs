@@ -185,7 +185,10 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
     let damping = s.damping.get_ref();
     SolverParameters {
         dt: timeline.dt as f32,
-        iterations: *s.iterations.get_ref(),
+        iterations: s.iterations.as_ref().map_or_else(
+            || timeline.file.material.model.get_ref().default_iterations(),
+            |i| *i.get_ref(),
+        ),
         gravity: s.gravity,
         hair_radius: *s.hair_radius.get_ref(),
         hair_hair_strength: s.hair_hair.as_ref().map(|h| h.get_ref().strength),

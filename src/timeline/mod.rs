@@ -274,11 +274,13 @@ impl Timeline {
                 )
             }
         };
-        if !(1..=100).contains(s.iterations.get_ref()) {
-            return fail(
-                s.iterations.span(),
-                "iterations must be between 1 and 100".into(),
-            );
+        if let Some(iterations) = &s.iterations {
+            if !(1..=100).contains(iterations.get_ref()) {
+                return fail(
+                    iterations.span(),
+                    "iterations must be between 1 and 100".into(),
+                );
+            }
         }
         if !s.gravity.iter().all(|g| g.is_finite()) {
             return fail(0..0, "gravity must be finite".into());

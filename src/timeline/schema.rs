@@ -200,7 +200,8 @@ pub struct HairHairSpec {
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSpec {
     pub dt: Spanned<TimeStep>,
-    pub iterations: Spanned<u32>,
+    /// `None`: the material model's default (`Model::default_iterations`).
+    pub iterations: Option<Spanned<u32>>,
     /// Acceleration of gravity, m/s^2 (Y up).
     pub gravity: [f32; 3],
     /// Hair radius, metres (collision margin and hair-hair distance).
@@ -215,7 +216,7 @@ impl Default for SolverSpec {
     fn default() -> Self {
         SolverSpec {
             dt: Spanned::new(0..0, TimeStep::Seconds(1.0 / 360.0)),
-            iterations: Spanned::new(0..0, 5),
+            iterations: None,
             gravity: [0.0, -9.8, 0.0],
             hair_radius: Spanned::new(0..0, 4.0e-5),
             hair_hair: None,

@@ -43,3 +43,24 @@ fn bench_refuses_bad_sizes() {
         2,
     );
 }
+
+#[test]
+fn bench_steps_the_physical_model_by_default_and_the_paper_model_on_request() {
+    let dir = TestDir::new();
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["bench", "--strands", "8", "--vertices", "8", "--steps", "2"];
+        args.extend_from_slice(extra);
+        args.push("--json");
+        serde_json::from_slice(&dir.run_ok(&args).stdout).expect("one JSON object")
+    };
+    let physical = run(&[]);
+    assert_eq!(physical["model"], "physical", "{physical}");
+    // The physical model's default iteration count.
+    assert_eq!(physical["iterations"], 1, "{physical}");
+    let ns = physical["ns_per_vertex_step"].as_f64().expect("a number");
+    assert!(ns > 0.0 && ns.is_finite(), "{physical}");
+    let paper = run(&["--model", "paper"]);
+    assert_eq!(paper["model"], "paper", "{paper}");
+    assert_eq!(paper["iterations"], 5, "{paper}");
+    dir.run_fail(&["bench", "--model", "stiff"], 2);
+}
