@@ -8,8 +8,10 @@
 //! (`dtheta`, world axis-angle). Constraints along the strand, grouped per
 //! edge `k` into one block of six rows: the bend/twist of joint `k`
 //! (between frames `k - 1` and `k`; for `k = 0` between the fixed root
-//! frame and the first edge's frame, the clamp, with half a Voronoi
-//! length) and the stretch/shear of edge `k`. Each block shares unknowns only with its
+//! frame and the first edge's frame, the clamp) and the stretch/shear of
+//! edge `k`. The bend/twist flexibility is tridiagonal over the joints (the
+//! consistent flexibility of step.rs `bend_flexibility`), which keeps the
+//! blocks' coupling to neighbours. Each block shares unknowns only with its
 //! neighbours, so `J W J^T + alpha/dt^2` is block-tridiagonal and one
 //! Newton-XPBD iteration costs O(edges). Hand-written rather than a sparse
 //! crate: the 6x6 blocks are fixed-size and the solve must not allocate per
@@ -41,9 +43,14 @@ pub struct EdgeCompliance {
     pub shear: f64,
     pub stretch: f64,
     /// Bend/twist compliance of the joint at the edge's first vertex on the
-    /// Darboux vector: `l_j / (4 E I)` and `l_j / (4 G J)`, 1/(N m).
+    /// Darboux vector (the diagonal of the consistent flexibility, see
+    /// `physical_constants`), 1/(N m).
     pub bend: f64,
     pub twist: f64,
+    /// The flexibility coupling this joint's Darboux vector with the next
+    /// joint's (the off-diagonal of the consistent flexibility), 1/(N m).
+    pub bend_next: f64,
+    pub twist_next: f64,
 }
 
 /// Scratch of one strand's direct solve (reused across steps).
@@ -178,8 +185,20 @@ impl Direct {
                 let (omega, g) = bend_linearisation(before, q, input.rest[k]);
                 self.g[k] = g;
                 let alpha_b = [a_b, a_b, a_t];
+                // The flexibility is tridiagonal over the joints: alpha~
+                // lambda takes the neighbours' multipliers too.
+                let next = [c.bend_next, c.bend_next, c.twist_next];
+                let before = input
+                    .compliance
+                    .get(k.wrapping_sub(1))
+                    .map_or([0.0; 3], |b| [b.bend_next, b.bend_next, b.twist_next]);
                 for r in 0..3 {
-                    rhs[r] = -(omega[r] - input.rest[k][r] as f64 + alpha_b[r] * lam[r]);
+                    let mut coupled =
+                        before[r] * self.lambda.get(k.wrapping_sub(1)).map_or(0.0, |l| l[r]);
+                    coupled += next[r] * self.lambda.get(k + 1).map_or(0.0, |l| l[r]);
+                    rhs[r] = -(omega[r] - input.rest[k][r] as f64
+                        + alpha_b[r] * lam[r]
+                        + coupled * inv_dt2);
                 }
                 let mut w_sum = inverse_inertia(input, k, d3);
                 if w_before > 0.0 {
@@ -240,6 +259,11 @@ impl Direct {
                 for col in 0..3 {
                     u[r][col] = -bb[r][col];
                 }
+            }
+            let c = &input.compliance[k];
+            let coupling = [c.bend_next, c.bend_next, c.twist_next];
+            for r in 0..3 {
+                u[r][r] += coupling[r] * inv_dt2;
             }
             let sb = mul_abt(&skew(self.d3[k]), &g_next);
             for r in 0..3 {

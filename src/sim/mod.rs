@@ -50,6 +50,7 @@ mod math;
 mod physical_tests;
 mod quarantine;
 mod rest_pose;
+mod sag_free;
 mod state;
 mod step;
 #[cfg(test)]
@@ -59,6 +60,7 @@ pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;
 pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
+pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
 

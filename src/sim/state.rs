@@ -40,6 +40,10 @@ pub(crate) struct VertexControl {
 pub(crate) struct RootAnchor {
     pub position: V3,
     pub frame: Quat,
+    /// The rest Darboux vector of the clamp between `frame` and the first
+    /// edge's frame (physical model): zero, or what the sag-free start
+    /// solved.
+    pub rest: V3,
 }
 
 /// A rigid transform as the kernel uses it.
@@ -120,6 +124,7 @@ pub mod attribute_names {
     pub const ROOT_ANCHOR: &str = "sim_root_anchor";
     pub const ROOT_FRAME_XYZ: &str = "sim_root_frame_xyz";
     pub const ROOT_FRAME_W: &str = "sim_root_frame_w";
+    pub const ROOT_REST: &str = "sim_root_rest";
     pub const FROZEN: &str = "sim_frozen";
 }
 
@@ -257,6 +262,7 @@ impl StrandSet {
         let mut anchor = RootAnchor {
             position: root_position,
             frame: IDENTITY,
+            rest: [0.0; 3],
         };
         let mut ok = n >= 2;
         let mut previous_tangent = [0.0f32, 0.0, 1.0];
@@ -499,7 +505,8 @@ impl StrandSet {
     ///   `sim_rest_length`: the edge starting at that vertex (the tip
     ///   copies the last edge);
     /// - per strand: `sim_root_anchor`, `sim_root_frame_xyz|w` (the root in
-    ///   scalp space), `sim_frozen` (int).
+    ///   scalp space), `sim_root_rest` (the clamp's rest Darboux vector),
+    ///   `sim_frozen` (int).
     ///
     /// The groom's points are the current positions (`positions()`).
     pub fn to_groom_attributes(&self) -> Vec<Attribute> {
@@ -563,6 +570,10 @@ impl StrandSet {
         attributes.push(Attribute::per_strand(
             names::ROOT_FRAME_W,
             AttributeValues::Float(root_frames.iter().map(|q| q[3]).collect()),
+        ));
+        attributes.push(Attribute::per_strand(
+            names::ROOT_REST,
+            AttributeValues::Vec3(self.roots.iter().map(|r| r.rest).collect()),
         ));
         attributes.push(Attribute::per_strand(
             names::FROZEN,
@@ -660,6 +671,13 @@ impl StrandSet {
             for (i, root) in set.roots.iter_mut().enumerate() {
                 root.position = anchors[i];
                 root.frame = [xyz[i][0], xyz[i][1], xyz[i][2], w[i]];
+            }
+        }
+        if let Some(rests) = vec3s(groom, names::ROOT_REST, s, Scope::Strand)? {
+            for (root, rest) in set.roots.iter_mut().zip(rests) {
+                if math::is_finite3(*rest) && math::dot(*rest, *rest) < 1.0 {
+                    root.rest = *rest;
+                }
             }
         }
         if let Some(attribute) = groom.attribute(names::FROZEN) {
