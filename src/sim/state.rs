@@ -89,7 +89,13 @@ pub struct StrandSet {
     pub(crate) roots: Vec<RootAnchor>,
     pub(crate) root_transform: Rigid,
     pub(crate) positions: Vec<V3>,
+    /// The vertices' real velocities, `(x_new - x_old) / dt` of the last
+    /// step.
     pub(crate) velocities: Vec<V3>,
+    /// What Follow-The-Leader's velocity correction (paper model) takes
+    /// off the real velocity for the next step's prediction, m/s; zero in
+    /// the physical model.
+    pub(crate) velocity_corrections: Vec<V3>,
     pub(crate) edges: Vec<EdgeState>,
     pub(crate) joints: Vec<JointState>,
     pub(crate) controls: Vec<VertexControl>,
@@ -117,6 +123,7 @@ pub mod attribute_names {
     ];
     pub const WETNESS: &str = "wetness";
     pub const VELOCITY: &str = "sim_velocity";
+    pub const VELOCITY_CORRECTION: &str = "sim_velocity_correction";
     pub const FRAME_XYZ: &str = "sim_frame_xyz";
     pub const FRAME_W: &str = "sim_frame_w";
     pub const ANGULAR_VELOCITY: &str = "sim_angular_velocity";
@@ -205,6 +212,7 @@ impl StrandSet {
             root_transform: Rigid::IDENTITY,
             positions: groom.points.clone(),
             velocities: vec![[0.0; 3]; vertex_count],
+            velocity_corrections: vec![[0.0; 3]; vertex_count],
             edges: vec![
                 EdgeState {
                     rotation: IDENTITY,
@@ -500,7 +508,9 @@ impl StrandSet {
     ///   of the joint at that vertex (root and tip copy their neighbour);
     /// - `bond_memory_*` (vec3 per vertex): `Omega_j` likewise;
     /// - `wetness` (float per vertex);
-    /// - `sim_velocity` (vec3 per vertex);
+    /// - `sim_velocity` (vec3 per vertex): the real velocity, m/s;
+    /// - `sim_velocity_correction` (vec3 per vertex): Follow-The-Leader's
+    ///   correction the next step takes off it (paper model);
     /// - `sim_frame_xyz` + `sim_frame_w`, `sim_angular_velocity`,
     ///   `sim_rest_length`: the edge starting at that vertex (the tip
     ///   copies the last edge);
@@ -531,6 +541,10 @@ impl StrandSet {
         attributes.push(Attribute::new(
             names::VELOCITY,
             AttributeValues::Vec3(self.velocities.clone()),
+        ));
+        attributes.push(Attribute::new(
+            names::VELOCITY_CORRECTION,
+            AttributeValues::Vec3(self.velocity_corrections.clone()),
         ));
         let edges = self.per_vertex_edge();
         attributes.push(Attribute::new(
@@ -637,6 +651,9 @@ impl StrandSet {
         if let Some(velocities) = vec3s(groom, names::VELOCITY, n, Scope::Vertex)? {
             set.velocities = velocities.to_vec();
         }
+        if let Some(corrections) = vec3s(groom, names::VELOCITY_CORRECTION, n, Scope::Vertex)? {
+            set.velocity_corrections = corrections.to_vec();
+        }
         let frame_xyz = vec3s(groom, names::FRAME_XYZ, n, Scope::Vertex)?;
         let frame_w = floats(groom, names::FRAME_W, n, Scope::Vertex)?;
         if let (Some(xyz), Some(w)) = (frame_xyz, frame_w) {
@@ -712,6 +729,7 @@ impl StrandSet {
                 let edge = &set.edges[v];
                 let joint = &set.joints[v];
                 let finite = math::is_finite3(set.velocities[v])
+                    && math::is_finite3(set.velocity_corrections[v])
                     && edge.rotation.iter().all(|c| c.is_finite())
                     && math::is_finite3(edge.angular_velocity)
                     && edge.rest_length.is_finite()

@@ -41,6 +41,7 @@ struct StrandMut<'a> {
     first_vertex: usize,
     positions: &'a mut [V3],
     velocities: &'a mut [V3],
+    velocity_corrections: &'a mut [V3],
     edges: &'a mut [EdgeState],
     joints: &'a mut [JointState],
     controls: &'a [VertexControl],
@@ -95,6 +96,7 @@ struct Work {
     db: Vec<[f32; 4]>,
     corrections: Vec<V3>,
     v: Vec<V3>,
+    dv: Vec<V3>,
     omega: Vec<V3>,
     compliance: Vec<EdgeCompliance>,
     direct: Direct,
@@ -110,6 +112,7 @@ impl Work {
             &mut self.rest,
             &mut self.corrections,
             &mut self.v,
+            &mut self.dv,
             &mut self.omega,
         ] {
             v.resize(n, [0.0; 3]);
@@ -304,6 +307,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         roots,
         positions,
         velocities,
+        velocity_corrections,
         edges,
         joints,
         controls,
@@ -312,6 +316,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
     } = strands;
     let mut positions = positions.as_mut_slice();
     let mut velocities = velocities.as_mut_slice();
+    let mut corrections = velocity_corrections.as_mut_slice();
     let mut edges = edges.as_mut_slice();
     let mut joints = joints.as_mut_slice();
     let mut controls = controls.as_slice();
@@ -321,6 +326,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         let n = w[1] - w[0];
         let (p, rest_p) = std::mem::take(&mut positions).split_at_mut(n);
         let (v, rest_v) = std::mem::take(&mut velocities).split_at_mut(n);
+        let (dv, rest_dv) = std::mem::take(&mut corrections).split_at_mut(n);
         let (e, rest_e) = std::mem::take(&mut edges).split_at_mut(n);
         let (j, rest_j) = std::mem::take(&mut joints).split_at_mut(n);
         let (c, rest_c) = controls.split_at(n);
@@ -328,6 +334,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         radii = rest_r;
         positions = rest_p;
         velocities = rest_v;
+        corrections = rest_dv;
         edges = rest_e;
         joints = rest_j;
         controls = rest_c;
@@ -338,6 +345,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
             first_vertex: w[0],
             positions: p,
             velocities: v,
+            velocity_corrections: dv,
             edges: e,
             joints: j,
             controls: c,
@@ -392,10 +400,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         // Damping slows the motion, not gravity: damping the acceleration
         // too would scale the weight by exp(-c dt) and move the static
         // equilibrium with c and dt.
-        let mut v = math::add(
-            math::scale(s.velocities[i], ctx.linear_keep),
-            math::scale(a, dt),
-        );
+        // Follow-The-Leader's correction (paper model) acts on the
+        // prediction only; the state keeps the real velocity.
+        let moving = math::sub(s.velocities[i], s.velocity_corrections[i]);
+        let mut v = math::add(math::scale(moving, ctx.linear_keep), math::scale(a, dt));
         v = math::add(v, blower_dv_here);
         if let Some((alpha, grid, _)) = ctx.hair_hair {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
@@ -787,18 +795,17 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
         }
     }
 
-    // (vi) Velocities from the position change.
+    // (vi) Velocities from the position change, and Follow-The-Leader's
+    // correction of them (DFTL), kept apart: the real velocity is what the
+    // state reports.
     for i in 0..n {
-        let mut v = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
+        work.v[i] = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
+        work.dv[i] = [0.0; 3];
         if let Some(correction) = ftl {
             if i + 1 < n && work.w[i] > 0.0 {
-                v = math::sub(
-                    v,
-                    math::scale(work.corrections[i + 1], correction * ctx.inv_dt),
-                );
+                work.dv[i] = math::scale(work.corrections[i + 1], correction * ctx.inv_dt);
             }
         }
-        work.v[i] = v;
     }
     for e in 0..m {
         // Im(q conj(q_old)) = Im((q - q_old) conj(q_old)) since q_old
@@ -842,6 +849,7 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
     }
     s.positions.copy_from_slice(&work.p[..n]);
     s.velocities.copy_from_slice(&work.v[..n]);
+    s.velocity_corrections.copy_from_slice(&work.dv[..n]);
     for e in 0..m {
         s.edges[e].rotation = work.q[e];
         s.edges[e].angular_velocity = work.omega[e];

@@ -591,6 +591,7 @@ fn with_frames_from_positions(
         attribute_names::FRAME_XYZ,
         attribute_names::FRAME_W,
         attribute_names::VELOCITY,
+        attribute_names::VELOCITY_CORRECTION,
         attribute_names::ANGULAR_VELOCITY,
     ] {
         groom.remove_attribute(name);
