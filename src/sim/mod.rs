@@ -21,6 +21,12 @@
 //!   (17). Strands run in parallel in groups of four (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.
+//! - Before the first step the caller may solve the sag-free rest shape
+//!   (`StrandSet::make_sag_free`, sag_free.rs): the groom then stands still
+//!   under gravity (physical model).
+//! - The state's velocity is the real one, `(x_new - x_old) / dt`; the
+//!   Follow-The-Leader correction (paper model) is kept apart and applied
+//!   to the next prediction only.
 //!
 //! ```
 //! use groombake::sim::*;
