@@ -21,7 +21,7 @@ pub struct BenchArgs {
     /// Elastic model: `physical` (real hair, direct solve) or `paper`.
     #[arg(long, default_value = "physical", value_parser = ["physical", "paper"])]
     model: String,
-    /// Constraint iterations per step (default: the model's, 1 physical,
+    /// Constraint iterations per step (default: the model's, 2 physical,
     /// 5 paper).
     #[arg(long)]
     iterations: Option<u32>,

@@ -8,8 +8,10 @@
 //! (`dtheta`, world axis-angle). Constraints along the strand, grouped per
 //! edge `k` into one block of six rows: the bend/twist of joint `k`
 //! (between frames `k - 1` and `k`; for `k = 0` between the fixed root
-//! frame and the first edge's frame, the clamp, with half a Voronoi
-//! length) and the stretch/shear of edge `k`. Each block shares unknowns only with its
+//! frame and the first edge's frame, the clamp) and the stretch/shear of
+//! edge `k`. The bend/twist flexibility is tridiagonal over the joints (the
+//! consistent flexibility of step.rs `bend_flexibility`), which keeps the
+//! blocks' coupling to neighbours. Each block shares unknowns only with its
 //! neighbours, so `J W J^T + alpha/dt^2` is block-tridiagonal and one
 //! Newton-XPBD iteration costs O(edges). Hand-written rather than a sparse
 //! crate: the 6x6 blocks are fixed-size and sparse in a known pattern
@@ -46,9 +48,14 @@ pub struct EdgeCompliance {
     pub shear: f64,
     pub stretch: f64,
     /// Bend/twist compliance of the joint at the edge's first vertex on the
-    /// Darboux vector: `l_j / (4 E I)` and `l_j / (4 G J)`, 1/(N m).
+    /// Darboux vector (the diagonal of the consistent flexibility, see
+    /// `physical_constants`), 1/(N m).
     pub bend: f64,
     pub twist: f64,
+    /// The flexibility coupling this joint's Darboux vector with the next
+    /// joint's (the off-diagonal of the consistent flexibility), 1/(N m).
+    pub bend_next: f64,
+    pub twist_next: f64,
 }
 
 /// What one strand's solve reads.
@@ -90,6 +97,10 @@ struct Constants<T> {
     a_st: T,
     a_b: T,
     a_t: T,
+    /// The bend and twist flexibility coupling joint `k` with joint
+    /// `k + 1` (the consistent flexibility's off-diagonal), over `dt^2`.
+    a_b_next: T,
+    a_t_next: T,
     rest: D3<T>,
     rest_w: T,
 }
@@ -198,6 +209,8 @@ impl<T: Real> Direct<T> {
                 a_st: gather(strands, |s| s.compliance[k].stretch * inv_dt2(s)),
                 a_b: gather(strands, |s| s.compliance[k].bend * inv_dt2(s)),
                 a_t: gather(strands, |s| s.compliance[k].twist * inv_dt2(s)),
+                a_b_next: gather(strands, |s| s.compliance[k].bend_next * inv_dt2(s)),
+                a_t_next: gather(strands, |s| s.compliance[k].twist_next * inv_dt2(s)),
                 rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
                 rest_w: gather(strands, |s| {
                     let r = s.rest[k].map(|v| v as f64);
@@ -331,8 +344,26 @@ impl<T: Real> Direct<T> {
         let lam = self.lambda[k];
         let mut b = [zero; 6];
         let alpha_b = [c.a_b, c.a_b, c.a_t];
+        // The flexibility is tridiagonal over the joints: alpha~ lambda
+        // takes the neighbours' multipliers too.
+        let coupled_before = match k.checked_sub(1) {
+            Some(before) => {
+                let (cb, lb) = (&self.constants[before], &self.lambda[before]);
+                [
+                    cb.a_b_next * lb[0],
+                    cb.a_b_next * lb[1],
+                    cb.a_t_next * lb[2],
+                ]
+            }
+            None => [zero; 3],
+        };
+        let coupled_next = match self.lambda.get(k + 1) {
+            Some(ln) => [c.a_b_next * ln[0], c.a_b_next * ln[1], c.a_t_next * ln[2]],
+            None => [zero; 3],
+        };
         for r in 0..3 {
-            b[r] = -(bend.omega[r] - c.rest[r] + alpha_b[r] * lam[r]);
+            let alpha_lambda = alpha_b[r] * lam[r] + (coupled_before[r] + coupled_next[r]);
+            b[r] = -(bend.omega[r] - c.rest[r] + alpha_lambda);
         }
         let along = d3[0] * lam[3] + d3[1] * lam[4] + d3[2] * lam[5];
         let a_diff = c.a_st - c.a_sh;
@@ -367,6 +398,10 @@ impl<T: Real> Direct<T> {
                 au[r][col] = -(cp.wq * gg + cp.dw * fp.g_d3[r] * g_before[col]);
             }
         }
+        // ... plus the flexibility coupling joints k-1 and k.
+        au[0][0] = au[0][0] + cp.a_b_next;
+        au[1][1] = au[1][1] + cp.a_b_next;
+        au[2][2] = au[2][2] + cp.a_t_next;
         // Stretch k-1 / bend k: -w_q l [d3]x G_k^T, column c = d3 x g_c.
         let mut bm = [[zero; 3]; 3];
         let wql = cp.wq * cp.l;

@@ -21,6 +21,12 @@
 //!   (17). Strands run in parallel in groups of four (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.
+//! - Before the first step the caller may solve the sag-free rest shape
+//!   (`StrandSet::make_sag_free`, sag_free.rs): the groom then stands still
+//!   under gravity (physical model).
+//! - The state's velocity is the real one, `(x_new - x_old) / dt`; the
+//!   Follow-The-Leader correction (paper model) is kept apart and applied
+//!   to the next prediction only.
 //!
 //! ```
 //! use groombake::sim::*;
@@ -50,6 +56,7 @@ mod math;
 mod physical_tests;
 mod quarantine;
 mod rest_pose;
+mod sag_free;
 mod state;
 mod step;
 #[cfg(test)]
@@ -59,6 +66,7 @@ pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;
 pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
+pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
 
@@ -120,14 +128,15 @@ pub enum Model {
 impl Model {
     /// Iterations per step when the timeline does not say. The paper's
     /// Table 1 uses 5 Gauss-Seidel sweeps. The physical model's iteration
-    /// is an exact solve of the linearised system, so one already meets the
-    /// accuracy the physical tests check (cantilever droop within 2 % of
-    /// the elastica at 8-32 edges and dt 1/120-1/1000, first natural
-    /// frequency within 5 %); more only shrink the residual of the
-    /// nonlinearity and cost one solve each.
+    /// is an exact solve of the linearised system; two meet the accuracy
+    /// the physical tests check (cantilever droop within 2 % of the
+    /// elastica at 8-32 edges and dt 1/120-1/1000, first natural frequency
+    /// within 5 %). One is not enough since the bend flexibility couples
+    /// neighbouring joints (32 edges at dt 1/120 droop 2.8 % short); more
+    /// only shrink the residual of the nonlinearity and cost one solve each.
     pub fn default_iterations(self) -> u32 {
         match self {
-            Model::Physical => 1,
+            Model::Physical => 2,
             Model::Paper => 5,
         }
     }

@@ -134,12 +134,6 @@ fn heavy_cantilever_droops_as_the_elastica_at_any_resolution_and_time_step() {
         let seconds = (12.0 / omega1) as f32 + 0.5;
         for edges in [8, 16, 32] {
             for dt in [1.0 / 120.0, 1.0 / 360.0, 1.0 / 1000.0] {
-                // Every resolution at dt 1/360 for every length; every
-                // time step for the 10 cm strand (the others cost the same
-                // and show the same independence of dt).
-                if length != 0.10 && dt != 1.0 / 360.0 {
-                    continue;
-                }
                 let mut set = horizontal(length, edges);
                 settle(&mut set, parameters(dt, damping), seconds);
                 let droop = tip_droop(&set);
@@ -148,16 +142,11 @@ fn heavy_cantilever_droops_as_the_elastica_at_any_resolution_and_time_step() {
                     1.0 / dt,
                     100.0 * (droop / reference - 1.0)
                 );
-                // The error falls as 1/edges^2 (+1.5%, +0.4%, +0.1% for
-                // 8, 16, 32 edges); 3 cm edges on the 24 cm strand in
-                // large deflection are the one case just above 2%.
-                let tolerance = if length > 0.2 && edges == 8 {
-                    0.03
-                } else {
-                    0.02
-                };
+                // The error falls as 1/edges^2 (about +0.5 %, +0.14 %,
+                // +0.03 % for 8, 16, 32 edges in small deflection, +1.1 %
+                // for 8 edges on the 24 cm strand in large deflection).
                 assert!(
-                    (droop / reference - 1.0).abs() < tolerance,
+                    (droop / reference - 1.0).abs() < 0.02,
                     "{length} m, {edges} edges, dt {dt}: {droop} vs {reference}"
                 );
                 let lengths = set.rest_lengths();
@@ -204,4 +193,174 @@ fn cantilever_swings_at_its_first_natural_frequency() {
         eprintln!("cantilever 5 cm, {edges} edges: f1 {f:.3} Hz, beam theory {f1:.3} Hz");
         assert!((f / f1 - 1.0).abs() < 0.05, "{f} vs {f1}");
     }
+}
+
+/// Per strand, the largest distance any of its vertices moves from where
+/// it started over `seconds` of settling under `gravity`.
+fn strand_drifts(set: &mut StrandSet, gravity: [f32; 3], seconds: f32) -> Vec<f64> {
+    let start = set.positions().to_vec();
+    let parameters = SolverParameters {
+        iterations: 3,
+        gravity,
+        ..SolverParameters::default()
+    };
+    let mut solver = Solver::new(parameters).unwrap();
+    let colliders = ColliderSet::new();
+    let mut drift = vec![0.0f64; set.strand_count()];
+    for _ in 0..(seconds / parameters.dt).round() as usize {
+        let report = solver
+            .step(set, &colliders, &Environment::default())
+            .unwrap();
+        assert!(report.contained.is_empty());
+        for (strand, d) in drift.iter_mut().enumerate() {
+            for v in set.strand_range(strand).unwrap() {
+                let moved = math::length(math::sub(set.positions()[v], start[v])) as f64;
+                *d = d.max(moved);
+            }
+        }
+    }
+    drift
+}
+
+/// hairutil's Bangs (tests/data): millimetres, hanging along -X.
+fn bangs() -> (Groom, [f32; 3]) {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/hairutil_Bangs_100.hair"
+    );
+    let mut groom = importers::read(std::path::Path::new(path)).unwrap();
+    groom.units = groom::Units::MILLIMETERS;
+    groom.convert_to(groom::Units::METERS, groom::UpAxis::Y);
+    (groom, [-9.8, 0.0, 0.0])
+}
+
+/// A generated scalp of hair combed down close to the head: it leaves the
+/// scalp along the normal and turns down within about 3 cm (drape 60
+/// rad/m). The full-head sample's drape of 10 rad/m holds hair out 7 cm
+/// sideways, which a real hair cannot do: the balance would need turns
+/// beyond 144 degrees at a joint (`clamped_joints`), and the hair sags.
+fn scalp() -> (Groom, [f32; 3]) {
+    let groom = crate::generate::generate(&crate::generate::GeneratorParameters {
+        strands: 60,
+        length: 0.21,
+        segment_length: 0.01,
+        scalp_angle: 95.0,
+        drape: 60.0,
+        ..Default::default()
+    })
+    .unwrap();
+    (groom, [0.0, -9.8, 0.0])
+}
+
+#[test]
+fn sag_free_start_keeps_the_bangs_and_a_scalp_where_they_were_groomed() {
+    for (name, (groom, gravity)) in [("bangs", bangs()), ("scalp", scalp())] {
+        let mut sagging = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+        let mut held = sagging.clone();
+        let report = held.make_sag_free(gravity);
+        assert_eq!(report.strands, groom.strand_vertex_counts.len(), "{name}");
+        assert_eq!(report.clamped_joints, 0, "{name}");
+        // The weight's stretch of the edges is not compensated: it must be
+        // far below what the eye (or the 1 mm criterion) sees.
+        assert!(report.max_stretch < 1e-5, "{name}: {}", report.max_stretch);
+        let kept = strand_drifts(&mut held, gravity, 2.0);
+        let sagged = strand_drifts(&mut sagging, gravity, 2.0);
+        let max = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max);
+        let mut sorted = kept.clone();
+        sorted.sort_by(f64::total_cmp);
+        let unstable: Vec<(usize, f64)> = kept
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| **d >= 1e-3)
+            .map(|(s, d)| (s, *d))
+            .collect();
+        eprintln!(
+            "{name}: max vertex drift in 2 s with sag-free {:.3} mm (median strand {:.4} mm, {} of {} strands >= 1 mm: {unstable:?}), without {:.1} mm (median strand {:.1} mm); edge stretch {:.2e} m",
+            max(&kept) * 1e3,
+            sorted[sorted.len() / 2] * 1e3,
+            unstable.len(),
+            kept.len(),
+            max(&sagged) * 1e3,
+            {
+                let mut s = sagged.clone();
+                s.sort_by(f64::total_cmp);
+                s[s.len() / 2] * 1e3
+            },
+            report.max_stretch
+        );
+        // Four of the Bangs' strands arch sideways for about 10 cm before
+        // they fall: their equilibrium is solved as exactly as the others'
+        // (they start to move at 1e-8 m), but a 40 um hair cannot hold it
+        // stably: two twist out of plane and fall, two creep a few mm. The
+        // same with 4x and 8x finer edges and dt down to 1/20000 s (a
+        // lateral-torsional instability of the rod, not of the solver).
+        let allowed = if name == "bangs" { 4 } else { 0 };
+        assert!(
+            unstable.len() <= allowed,
+            "{name}: {} strands drift >= 1 mm with sag-free",
+            unstable.len()
+        );
+        assert!(
+            sorted[sorted.len() / 2] < 1e-5,
+            "{name}: median strand drifts"
+        );
+        assert!(
+            max(&sagged) > 0.02,
+            "{name}: sags only {} m without",
+            max(&sagged)
+        );
+    }
+}
+
+#[test]
+fn sag_free_rest_is_the_natural_shape_the_bonds_hold() {
+    // A horizontal cantilever held straight: its rest shape curls up (the
+    // memories of every bond moved alike) ...
+    let mut set = horizontal(0.05, 8);
+    let authored = set.positions().to_vec();
+    set.make_sag_free([0.0, -9.8, 0.0]);
+    let rest = set.rest_darboux();
+    for (joint, rest) in rest.iter().enumerate().take(8).skip(1) {
+        let memories: Vec<[f32; 3]> = BondKind::ALL
+            .iter()
+            .map(|k| set.bond_memories(*k)[joint])
+            .collect();
+        assert!(memories.windows(2).all(|w| w[0] == w[1]));
+        assert!((memories[0][0] - rest[0]).abs() < 1e-7);
+        // Gravity pulls the tip down (-Y): the natural shape bends up.
+        assert!(rest[0].abs() > 1e-4, "joint {joint}: {rest:?}");
+    }
+    // ... which it takes without gravity. A wash then (hydrogen broken and
+    // re-formed in that shape) changes nothing: back under gravity it
+    // stands where it was authored.
+    let mut solver = Solver::new(parameters(1.0 / 360.0, 20.0)).unwrap();
+    let colliders = ColliderSet::new();
+    let drive = |rate: f32| Environment {
+        gravity: Gravity::Off,
+        bond_rate_drive: [rate, 0.0, 0.0, 0.0],
+        ..Environment::default()
+    };
+    for step in 0..720 {
+        let environment = drive(if step < 360 { -100.0 } else { 100.0 });
+        solver.step(&mut set, &colliders, &environment).unwrap();
+    }
+    let lifted = set.positions()[8][1];
+    for _ in 0..720 {
+        solver
+            .step(&mut set, &colliders, &Environment::default())
+            .unwrap();
+    }
+    let drift = set
+        .positions()
+        .iter()
+        .zip(&authored)
+        .map(|(p, q)| math::length(math::sub(*p, *q)))
+        .fold(0.0f32, f32::max);
+    eprintln!(
+        "sag-free cantilever: tip {:.2} mm above the authored one without gravity, after a wash and 2 s under gravity {:.4} mm from it",
+        lifted * 1e3,
+        drift * 1e3
+    );
+    assert!(lifted > 3e-3, "the natural shape must curl up: {lifted}");
+    assert!(drift < 1e-4, "{drift}");
 }

@@ -52,9 +52,8 @@ pub fn contain_blowups(strands: &mut StrandSet, before: &[V3]) -> Vec<Blowup> {
         if before.len() == strands.positions.len() {
             strands.positions[first..end].copy_from_slice(&before[first..end]);
         }
-        for v in &mut strands.velocities[first..end] {
-            *v = [0.0; 3];
-        }
+        strands.velocities[first..end].fill([0.0; 3]);
+        strands.velocity_corrections[first..end].fill([0.0; 3]);
         strands.frozen[strand] = true;
         blowups.push(Blowup { strand, reason });
     }

@@ -40,6 +40,10 @@ pub(crate) struct VertexControl {
 pub(crate) struct RootAnchor {
     pub position: V3,
     pub frame: Quat,
+    /// The rest Darboux vector of the clamp between `frame` and the first
+    /// edge's frame (physical model): zero, or what the sag-free start
+    /// solved.
+    pub rest: V3,
 }
 
 /// A rigid transform as the kernel uses it.
@@ -85,7 +89,13 @@ pub struct StrandSet {
     pub(crate) roots: Vec<RootAnchor>,
     pub(crate) root_transform: Rigid,
     pub(crate) positions: Vec<V3>,
+    /// The vertices' real velocities, `(x_new - x_old) / dt` of the last
+    /// step.
     pub(crate) velocities: Vec<V3>,
+    /// What Follow-The-Leader's velocity correction (paper model) takes
+    /// off the real velocity for the next step's prediction, m/s; zero in
+    /// the physical model.
+    pub(crate) velocity_corrections: Vec<V3>,
     pub(crate) edges: Vec<EdgeState>,
     pub(crate) joints: Vec<JointState>,
     pub(crate) controls: Vec<VertexControl>,
@@ -113,6 +123,7 @@ pub mod attribute_names {
     ];
     pub const WETNESS: &str = "wetness";
     pub const VELOCITY: &str = "sim_velocity";
+    pub const VELOCITY_CORRECTION: &str = "sim_velocity_correction";
     pub const FRAME_XYZ: &str = "sim_frame_xyz";
     pub const FRAME_W: &str = "sim_frame_w";
     pub const ANGULAR_VELOCITY: &str = "sim_angular_velocity";
@@ -120,6 +131,7 @@ pub mod attribute_names {
     pub const ROOT_ANCHOR: &str = "sim_root_anchor";
     pub const ROOT_FRAME_XYZ: &str = "sim_root_frame_xyz";
     pub const ROOT_FRAME_W: &str = "sim_root_frame_w";
+    pub const ROOT_REST: &str = "sim_root_rest";
     pub const FROZEN: &str = "sim_frozen";
 }
 
@@ -200,6 +212,7 @@ impl StrandSet {
             root_transform: Rigid::IDENTITY,
             positions: groom.points.clone(),
             velocities: vec![[0.0; 3]; vertex_count],
+            velocity_corrections: vec![[0.0; 3]; vertex_count],
             edges: vec![
                 EdgeState {
                     rotation: IDENTITY,
@@ -257,6 +270,7 @@ impl StrandSet {
         let mut anchor = RootAnchor {
             position: root_position,
             frame: IDENTITY,
+            rest: [0.0; 3],
         };
         let mut ok = n >= 2;
         let mut previous_tangent = [0.0f32, 0.0, 1.0];
@@ -494,12 +508,15 @@ impl StrandSet {
     ///   of the joint at that vertex (root and tip copy their neighbour);
     /// - `bond_memory_*` (vec3 per vertex): `Omega_j` likewise;
     /// - `wetness` (float per vertex);
-    /// - `sim_velocity` (vec3 per vertex);
+    /// - `sim_velocity` (vec3 per vertex): the real velocity, m/s;
+    /// - `sim_velocity_correction` (vec3 per vertex): Follow-The-Leader's
+    ///   correction the next step takes off it (paper model);
     /// - `sim_frame_xyz` + `sim_frame_w`, `sim_angular_velocity`,
     ///   `sim_rest_length`: the edge starting at that vertex (the tip
     ///   copies the last edge);
     /// - per strand: `sim_root_anchor`, `sim_root_frame_xyz|w` (the root in
-    ///   scalp space), `sim_frozen` (int).
+    ///   scalp space), `sim_root_rest` (the clamp's rest Darboux vector),
+    ///   `sim_frozen` (int).
     ///
     /// The groom's points are the current positions (`positions()`).
     pub fn to_groom_attributes(&self) -> Vec<Attribute> {
@@ -524,6 +541,10 @@ impl StrandSet {
         attributes.push(Attribute::new(
             names::VELOCITY,
             AttributeValues::Vec3(self.velocities.clone()),
+        ));
+        attributes.push(Attribute::new(
+            names::VELOCITY_CORRECTION,
+            AttributeValues::Vec3(self.velocity_corrections.clone()),
         ));
         let edges = self.per_vertex_edge();
         attributes.push(Attribute::new(
@@ -563,6 +584,10 @@ impl StrandSet {
         attributes.push(Attribute::per_strand(
             names::ROOT_FRAME_W,
             AttributeValues::Float(root_frames.iter().map(|q| q[3]).collect()),
+        ));
+        attributes.push(Attribute::per_strand(
+            names::ROOT_REST,
+            AttributeValues::Vec3(self.roots.iter().map(|r| r.rest).collect()),
         ));
         attributes.push(Attribute::per_strand(
             names::FROZEN,
@@ -626,6 +651,9 @@ impl StrandSet {
         if let Some(velocities) = vec3s(groom, names::VELOCITY, n, Scope::Vertex)? {
             set.velocities = velocities.to_vec();
         }
+        if let Some(corrections) = vec3s(groom, names::VELOCITY_CORRECTION, n, Scope::Vertex)? {
+            set.velocity_corrections = corrections.to_vec();
+        }
         let frame_xyz = vec3s(groom, names::FRAME_XYZ, n, Scope::Vertex)?;
         let frame_w = floats(groom, names::FRAME_W, n, Scope::Vertex)?;
         if let (Some(xyz), Some(w)) = (frame_xyz, frame_w) {
@@ -662,6 +690,13 @@ impl StrandSet {
                 root.frame = [xyz[i][0], xyz[i][1], xyz[i][2], w[i]];
             }
         }
+        if let Some(rests) = vec3s(groom, names::ROOT_REST, s, Scope::Strand)? {
+            for (root, rest) in set.roots.iter_mut().zip(rests) {
+                if math::is_finite3(*rest) && math::dot(*rest, *rest) < 1.0 {
+                    root.rest = *rest;
+                }
+            }
+        }
         if let Some(attribute) = groom.attribute(names::FROZEN) {
             match &attribute.values {
                 AttributeValues::Int(values) if values.len() == s => {
@@ -694,6 +729,7 @@ impl StrandSet {
                 let edge = &set.edges[v];
                 let joint = &set.joints[v];
                 let finite = math::is_finite3(set.velocities[v])
+                    && math::is_finite3(set.velocity_corrections[v])
                     && edge.rotation.iter().all(|c| c.is_finite())
                     && math::is_finite3(edge.angular_velocity)
                     && edge.rest_length.is_finite()

@@ -15,6 +15,7 @@ use super::forces::{blower_dv, EdgeGrid};
 use super::lanes::{Group, LaneInput, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
+use super::sag_free::segment_mass;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
 use super::{
     Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, SimError, SolverParameters,
@@ -40,6 +41,7 @@ struct StrandMut<'a> {
     first_vertex: usize,
     positions: &'a mut [V3],
     velocities: &'a mut [V3],
+    velocity_corrections: &'a mut [V3],
     edges: &'a mut [EdgeState],
     joints: &'a mut [JointState],
     controls: &'a [VertexControl],
@@ -94,6 +96,7 @@ struct Work {
     db: Vec<[f32; 4]>,
     corrections: Vec<V3>,
     v: Vec<V3>,
+    dv: Vec<V3>,
     omega: Vec<V3>,
     compliance: Vec<EdgeCompliance>,
     direct: Direct<f64>,
@@ -109,6 +112,7 @@ impl Work {
             &mut self.rest,
             &mut self.corrections,
             &mut self.v,
+            &mut self.dv,
             &mut self.omega,
         ] {
             v.resize(n, [0.0; 3]);
@@ -303,6 +307,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         roots,
         positions,
         velocities,
+        velocity_corrections,
         edges,
         joints,
         controls,
@@ -311,6 +316,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
     } = strands;
     let mut positions = positions.as_mut_slice();
     let mut velocities = velocities.as_mut_slice();
+    let mut corrections = velocity_corrections.as_mut_slice();
     let mut edges = edges.as_mut_slice();
     let mut joints = joints.as_mut_slice();
     let mut controls = controls.as_slice();
@@ -320,6 +326,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         let n = w[1] - w[0];
         let (p, rest_p) = std::mem::take(&mut positions).split_at_mut(n);
         let (v, rest_v) = std::mem::take(&mut velocities).split_at_mut(n);
+        let (dv, rest_dv) = std::mem::take(&mut corrections).split_at_mut(n);
         let (e, rest_e) = std::mem::take(&mut edges).split_at_mut(n);
         let (j, rest_j) = std::mem::take(&mut joints).split_at_mut(n);
         let (c, rest_c) = controls.split_at(n);
@@ -327,6 +334,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
         radii = rest_r;
         positions = rest_p;
         velocities = rest_v;
+        corrections = rest_dv;
         edges = rest_e;
         joints = rest_j;
         controls = rest_c;
@@ -337,6 +345,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
             first_vertex: w[0],
             positions: p,
             velocities: v,
+            velocity_corrections: dv,
             edges: e,
             joints: j,
             controls: c,
@@ -391,10 +400,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         // Damping slows the motion, not gravity: damping the acceleration
         // too would scale the weight by exp(-c dt) and move the static
         // equilibrium with c and dt.
-        let mut v = math::add(
-            math::scale(s.velocities[i], ctx.linear_keep),
-            math::scale(a, dt),
-        );
+        // Follow-The-Leader's correction (paper model) acts on the
+        // prediction only; the state keeps the real velocity.
+        let moving = math::sub(s.velocities[i], s.velocity_corrections[i]);
+        let mut v = math::add(math::scale(moving, ctx.linear_keep), math::scale(a, dt));
         v = math::add(v, blower_dv_here);
         if let Some((alpha, grid, _)) = ctx.hair_hair {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
@@ -402,7 +411,8 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         work.p[i] = math::add(x, math::scale(v, dt));
     }
     work.root_frame = math::qmul(ctx.root_transform.rotation, s.root.frame);
-    work.rest[0] = [0.0; 3];
+    // The clamp's rest turn (zero unless the sag-free start set one).
+    work.rest[0] = s.root.rest;
     for e in 0..m {
         let edge = s.edges[e];
         work.q_old[e] = edge.rotation;
@@ -483,7 +493,7 @@ fn physical_constants(physical: &Physical, s: &StrandMut<'_>, work: &mut Work) {
         let l = work.l[e] as f64;
         let r = 0.5 * (s.radii[e] as f64 + s.radii[e + 1] as f64);
         let area = pi * r * r;
-        let segment = physical.density * area * l;
+        let segment = segment_mass(physical.density, s.radii[e], s.radii[e + 1], l);
         // Vertex e gets the halves of edges e - 1 and e.
         mass[1] = 0.5 * segment;
         if work.w[e] > 0.0 {
@@ -503,26 +513,79 @@ fn physical_constants(physical: &Physical, s: &StrandMut<'_>, work: &mut Work) {
         };
         let e_mod = physical.youngs_modulus * cuticle;
         let g_mod = physical.shear_modulus * cuticle;
-        let mut c = EdgeCompliance {
+        work.compliance[e] = EdgeCompliance {
             shear: l / (g_mod * area),
             stretch: l / (e_mod * area),
-            bend: 0.0,
-            twist: 0.0,
+            ..EdgeCompliance::default()
         };
-        // Joint e's Voronoi length; the root joint has only half an edge.
-        let (lj, joint) = if e > 0 {
-            (0.5 * (work.l[e - 1] as f64 + l), s.joints[e].cuticle as f64)
-        } else {
-            (0.5 * l, 1.0)
-        };
-        let rj = s.radii[e] as f64;
-        let inertia = pi * rj.powi(4) / 4.0;
-        c.bend = lj / (4.0 * physical.youngs_modulus * joint * inertia);
-        c.twist = lj / (4.0 * physical.shear_modulus * joint * 2.0 * inertia);
-        work.compliance[e] = c;
     }
+    bend_flexibility(
+        physical.youngs_modulus,
+        physical.shear_modulus,
+        &work.l[..m],
+        s.radii,
+        s.joints,
+        &mut work.compliance[..m],
+    );
     if work.w[m] > 0.0 {
         work.w[m] = (1.0 / mass[0]) as f32;
+    }
+}
+
+/// The bend/twist compliances of the joints: the consistent flexibility of
+/// a moment that varies linearly along each edge (the mixed, Hellinger-
+/// Reissner beam element; the XPBD multipliers are the joints' moments).
+///
+/// The Darboux vector of joint `j` is half the turn between edges `j - 1`
+/// and `j`, and that turn is the curvature integrated against the hat
+/// function of vertex `j`: with the moment linear on each edge, edge `e`
+/// (length `l`, stiffness `EI`) adds `l / (3 EI)` to each end joint's
+/// flexibility and `l / (6 EI)` between them (times 1/4 for half-angles).
+/// Lumping it all on the diagonal (`l_j / EI` with the Voronoi length)
+/// charged the clamp's joint with the moment at the root over its half
+/// edge, although the moment falls along that edge: first-order wrong at
+/// the clamp, the heavy cantilever drooped `+(h/L)^2` too far (+2.8 % for
+/// 8 edges on 24 cm). The tip has no joint (free end, no moment).
+pub(super) fn bend_flexibility(
+    youngs_modulus: f64,
+    shear_modulus: f64,
+    lengths: &[f32],
+    radii: &[f32],
+    joints: &[JointState],
+    out: &mut [EdgeCompliance],
+) {
+    let m = lengths.len();
+    let pi = std::f64::consts::PI;
+    // The cuticle factor at vertex `i` (the root is healthy; the tip has
+    // no joint of its own and takes the last one's).
+    let cuticle = |i: usize| -> f64 {
+        if i == 0 || m < 2 {
+            1.0
+        } else {
+            joints[i.min(m - 1)].cuticle as f64
+        }
+    };
+    for c in out.iter_mut() {
+        (c.bend, c.twist, c.bend_next, c.twist_next) = (0.0, 0.0, 0.0, 0.0);
+    }
+    for e in 0..m {
+        let l = lengths[e] as f64;
+        let r = 0.5 * (radii[e] as f64 + radii[e + 1] as f64);
+        let inertia = pi * r.powi(4) / 4.0;
+        let factor = 0.5 * (cuticle(e) + cuticle(e + 1));
+        // Per unit of the Darboux vector (half-angles): a quarter.
+        let bend = l / (4.0 * youngs_modulus * factor * inertia);
+        let twist = l / (4.0 * shear_modulus * factor * 2.0 * inertia);
+        let c = &mut out[e];
+        c.bend += bend / 3.0;
+        c.twist += twist / 3.0;
+        if e + 1 < m {
+            c.bend_next = bend / 6.0;
+            c.twist_next = twist / 6.0;
+            let next = &mut out[e + 1];
+            next.bend += bend / 3.0;
+            next.twist += twist / 3.0;
+        }
     }
 }
 
@@ -789,18 +852,17 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
         }
     }
 
-    // (vi) Velocities from the position change.
+    // (vi) Velocities from the position change, and Follow-The-Leader's
+    // correction of them (DFTL), kept apart: the real velocity is what the
+    // state reports.
     for i in 0..n {
-        let mut v = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
+        work.v[i] = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
+        work.dv[i] = [0.0; 3];
         if let Some(correction) = ftl {
             if i + 1 < n && work.w[i] > 0.0 {
-                v = math::sub(
-                    v,
-                    math::scale(work.corrections[i + 1], correction * ctx.inv_dt),
-                );
+                work.dv[i] = math::scale(work.corrections[i + 1], correction * ctx.inv_dt);
             }
         }
-        work.v[i] = v;
     }
     for e in 0..m {
         // Im(q conj(q_old)) = Im((q - q_old) conj(q_old)) since q_old
@@ -844,6 +906,7 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
     }
     s.positions.copy_from_slice(&work.p[..n]);
     s.velocities.copy_from_slice(&work.v[..n]);
+    s.velocity_corrections.copy_from_slice(&work.dv[..n]);
     for e in 0..m {
         s.edges[e].rotation = work.q[e];
         s.edges[e].angular_velocity = work.omega[e];

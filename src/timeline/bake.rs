@@ -313,7 +313,14 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     let material = material_of(timeline);
     // A groom written by a `state` export continues where it stopped; any
     // other starts fresh (bond rates and wetness taken where present).
-    let strands = StrandSet::from_state(&groom, &material)?;
+    let mut strands = StrandSet::from_state(&groom, &material)?;
+    // Sag-free start: the groom as authored is the shape under gravity. A
+    // groom that continues a bake (it has the solver's frames) keeps the
+    // rest shape it carries.
+    let continues = groom.attribute(attribute_names::FRAME_XYZ).is_some();
+    if timeline.file.solver.sag_free && !continues {
+        strands.make_sag_free(timeline.file.solver.gravity);
+    }
     let mut colliders = ColliderSet::new();
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
@@ -605,6 +612,7 @@ fn with_frames_from_positions(
         attribute_names::FRAME_XYZ,
         attribute_names::FRAME_W,
         attribute_names::VELOCITY,
+        attribute_names::VELOCITY_CORRECTION,
         attribute_names::ANGULAR_VELOCITY,
     ] {
         groom.remove_attribute(name);

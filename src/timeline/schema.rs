@@ -210,6 +210,9 @@ pub struct SolverSpec {
     pub damping: Spanned<DampingSpec>,
     /// Quaternion inverse mass as `scale * w_p / l^2` (METHOD G).
     pub quaternion_mass_scale: Spanned<f32>,
+    /// Sag-free start (physical model): before the first stage, solve the
+    /// rest shape so the groom as authored stands still under `gravity`.
+    pub sag_free: bool,
 }
 
 impl Default for SolverSpec {
@@ -228,6 +231,7 @@ impl Default for SolverSpec {
                 },
             ),
             quaternion_mass_scale: Spanned::new(0..0, 1.0),
+            sag_free: true,
         }
     }
 }
