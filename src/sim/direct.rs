@@ -28,6 +28,16 @@ use super::math::{Quat, V3};
 /// free motion.
 const MAX_TURN: f64 = 0.1;
 
+/// How much of a touching vertex's inverse mass along the contact normal
+/// the solve removes: it is 100 times heavier across the surface than
+/// along it. A full lock (1) makes the stretch block of an edge lying on a
+/// surface singular up to its tiny compliance, and the Cholesky pivots
+/// lost to round-off blew short pressed strands up; at 0.99 the edges of
+/// the bed-hair press stay within 0.001 % of rest and the vertex moves
+/// across the surface by 1 % of a free vertex's correction (the
+/// projection after the solve takes that back).
+const CONTACT_LOCK: f64 = 0.99;
+
 type M6 = [[f64; 6]; 6];
 type V6 = [f64; 6];
 type M3 = [[f64; 3]; 3];
@@ -66,6 +76,13 @@ pub struct Direct {
 pub struct DirectInput<'a> {
     /// Vertex inverse masses (0: pinned or driven).
     pub w: &'a [f32],
+    /// Per vertex, the unit normal of a contact the solve must hardly move
+    /// the vertex along (zero: no contact), or empty when nothing touches.
+    /// The contact is folded into the vertex's inverse mass,
+    /// `w (I - CONTACT_LOCK n n^T)`: the strand keeps its length by sliding
+    /// along the surface instead of being pushed into it or having its
+    /// edges squeezed by a projection after the solve.
+    pub contact_normals: &'a [V3],
     /// Frame inverse rotational inertias across the tangent (0: fixed).
     pub w_q: &'a [f32],
     /// Frame inverse rotational inertias about the tangent (twist).
@@ -208,15 +225,16 @@ impl Direct {
                     }
                 }
             }
-            let (w0, w1, wq) = (
-                input.w[k] as f64,
-                input.w[k + 1] as f64,
+            let (m0, m1, wq) = (
+                vertex_mobility(input, k),
+                vertex_mobility(input, k + 1),
                 input.w_q[k] as f64,
             );
             for r in 0..3 {
                 for col in 0..3 {
                     let delta = if r == col { 1.0 } else { 0.0 };
-                    block[3 + r][3 + col] = (w0 + w1) * delta
+                    block[3 + r][3 + col] = m0[r][col]
+                        + m1[r][col]
                         + wq * l * l * (delta - d3[r] * d3[col])
                         + alpha_s[r][col];
                 }
@@ -230,7 +248,7 @@ impl Direct {
         // Couplings between block k and k + 1.
         for k in 0..m.saturating_sub(1) {
             let wq = input.w_q[k] as f64;
-            let wp = input.w[k + 1] as f64;
+            let wp = vertex_mobility(input, k + 1);
             let l = input.l[k] as f64;
             let g_next = self.g[k + 1];
             let mut u = [[0.0; 6]; 6];
@@ -245,8 +263,8 @@ impl Direct {
             for r in 0..3 {
                 for col in 0..3 {
                     u[3 + r][col] = -wq * l * sb[r][col];
+                    u[3 + r][3 + col] = -wp[r][col];
                 }
-                u[3 + r][3 + r] = -wp;
             }
             self.upper[k] = u;
         }
@@ -344,8 +362,9 @@ impl Direct {
                     *dc -= self.rhs[i][3 + c];
                 }
             }
+            let d = mul_av(&vertex_mobility(input, i), d);
             for c in 0..3 {
-                self.p[i][c] += w * d[c];
+                self.p[i][c] += d[c];
             }
         }
         for e in 0..m {
@@ -424,6 +443,24 @@ fn inverse_inertia(input: &DirectInput<'_>, k: usize, d3: D3) -> M3 {
         std::array::from_fn(|c| {
             let delta = if r == c { 1.0 } else { 0.0 };
             wb * delta + (wt - wb) * d3[r] * d3[c]
+        })
+    })
+}
+
+/// The inverse mass of vertex `i` as a matrix: `w I`, or
+/// `w (I - CONTACT_LOCK n n^T)` when it touches a collider with normal `n`
+/// (hardly any motion into or out of the surface during the solve).
+fn vertex_mobility(input: &DirectInput<'_>, i: usize) -> M3 {
+    let w = input.w[i] as f64;
+    let lock = CONTACT_LOCK;
+    let n = input
+        .contact_normals
+        .get(i)
+        .map_or([0.0; 3], |n| [n[0] as f64, n[1] as f64, n[2] as f64]);
+    std::array::from_fn(|r| {
+        std::array::from_fn(|c| {
+            let delta = if r == c { 1.0 } else { 0.0 };
+            w * (delta - lock * n[r] * n[c])
         })
     })
 }

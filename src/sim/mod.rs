@@ -42,6 +42,8 @@
 mod bonds;
 mod colliders;
 mod constraints;
+#[cfg(test)]
+pub(crate) mod contact_tests;
 mod direct;
 mod forces;
 mod lanes;

@@ -6,7 +6,7 @@
 //! state and commits it only if it is finite.
 
 use super::bonds::{reform, rest_darboux};
-use super::colliders::{project, PreparedCollider};
+use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
@@ -96,6 +96,9 @@ struct Work {
     v: Vec<V3>,
     omega: Vec<V3>,
     compliance: Vec<EdgeCompliance>,
+    /// The physical model's contacts this step: each touching vertex's
+    /// surface normal (zero: none).
+    contact_normals: Vec<V3>,
     direct: Direct,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -110,6 +113,7 @@ impl Work {
             &mut self.corrections,
             &mut self.v,
             &mut self.omega,
+            &mut self.contact_normals,
         ] {
             v.resize(n, [0.0; 3]);
         }
@@ -609,29 +613,80 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
 
 impl Work {
     /// (iv) of the physical model: `iterations` Newton-XPBD iterations,
-    /// each an exact solve of the strand's linearised compliant system,
-    /// with collisions after each.
+    /// each an exact solve of the strand's linearised compliant system.
+    /// Collisions (with their friction) come before each solve and the
+    /// solve keeps them: a touching vertex moves along the surface, and
+    /// hardly across it (`contact_normals` in direct.rs). Pinning vertices that static
+    /// friction holds was tried: a strand pressed between its root and a
+    /// held tip buckled into a zig-zag the Newton iterations could not
+    /// follow (edges 50 % long). A contact
+    /// found after the last solve gets one more solve, so the step never
+    /// ends on a projection that squeezes or stretches edges.
     fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
         let m = n - 1;
+        let colliding = !ctx.colliders.is_empty();
+        if colliding {
+            self.contact_normals[..n].fill([0.0; 3]);
+            self.collide_contacts(ctx, n);
+        }
         self.direct.begin(&self.p[..n], &self.q[..m]);
-        for _ in 0..ctx.iterations {
-            self.direct.iterate(&DirectInput {
-                w: &self.w[..n],
-                w_q: &self.w_q[..m],
-                w_twist: &self.w_twist[..m],
-                l: &self.l[..m],
-                rest: &self.rest[..m],
-                compliance: &self.compliance[..m],
-                root_frame: self.root_frame,
-                dt: ctx.dt,
-            });
-            if !ctx.colliders.is_empty() {
+        for iteration in 0..ctx.iterations {
+            self.direct_iteration(ctx, n, colliding);
+            if colliding {
                 self.direct.positions_f32(&mut self.p[..n]);
-                self.collide(ctx, n);
+                let moved = self.collide_contacts(ctx, n);
                 self.direct.set_positions(&self.p[..n]);
+                if moved && iteration + 1 == ctx.iterations {
+                    self.direct_iteration(ctx, n, colliding);
+                }
             }
         }
         self.direct.end(&mut self.p[..n], &mut self.q[..m]);
+    }
+
+    fn direct_iteration(&mut self, ctx: &Context<'_>, n: usize, colliding: bool) {
+        let m = n - 1;
+        self.direct.iterate(&DirectInput {
+            w: &self.w[..n],
+            contact_normals: if colliding {
+                &self.contact_normals[..n]
+            } else {
+                &[]
+            },
+            w_q: &self.w_q[..m],
+            w_twist: &self.w_twist[..m],
+            l: &self.l[..m],
+            rest: &self.rest[..m],
+            compliance: &self.compliance[..m],
+            root_frame: self.root_frame,
+            dt: ctx.dt,
+        });
+    }
+
+    /// Projects the free vertices out of the colliders (with friction) and
+    /// records the contacts for the solve: a contact lasts the rest of the
+    /// step. Returns whether a vertex moved (more than a hundredth of the
+    /// hair radius).
+    fn collide_contacts(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let mut moved = false;
+        for i in 1..n {
+            if self.w[i] <= 0.0 {
+                continue;
+            }
+            let contact = project_contact(
+                ctx.colliders,
+                self.p[i],
+                Some(self.x[i]),
+                ctx.radius,
+                ctx.dt,
+            );
+            moved |= math::length(math::sub(contact.position, self.p[i])) > 0.01 * ctx.radius;
+            self.p[i] = contact.position;
+            if let Some(normal) = contact.normal {
+                self.contact_normals[i] = normal;
+            }
+        }
+        moved
     }
 }
 
