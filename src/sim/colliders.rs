@@ -207,11 +207,33 @@ impl PreparedCollider<'_> {
 /// `mu * depth`. Returns the new position.
 pub(crate) fn project(
     colliders: &[PreparedCollider<'_>],
-    mut p: V3,
+    p: V3,
     start: Option<V3>,
     radius: f32,
     dt: f32,
 ) -> V3 {
+    project_contact(colliders, p, start, radius, dt).position
+}
+
+/// What a projection found at one vertex.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Contact {
+    /// The vertex outside every collider.
+    pub position: V3,
+    /// The outward normal of the (last) surface it was pushed out of.
+    pub normal: Option<V3>,
+}
+
+/// [`project`], also saying which surface the vertex touches (for a solve
+/// that keeps contacts as constraints).
+pub(crate) fn project_contact(
+    colliders: &[PreparedCollider<'_>],
+    mut p: V3,
+    start: Option<V3>,
+    radius: f32,
+    dt: f32,
+) -> Contact {
+    let mut normal = None;
     for c in colliders {
         if p[0] < c.min[0]
             || p[1] < c.min[1]
@@ -252,6 +274,7 @@ pub(crate) fn project(
             continue;
         };
         let mut target = add(surface, scale(outward, radius));
+        normal = Some(outward);
         if let Some(start) = start {
             let mu = c.collider.friction;
             if mu > 0.0 {
@@ -271,7 +294,10 @@ pub(crate) fn project(
         }
         p = target;
     }
-    p
+    Contact {
+        position: p,
+        normal,
+    }
 }
 
 #[cfg(test)]

@@ -36,6 +36,16 @@ use super::math::{Quat, V3};
 /// free motion.
 const MAX_TURN: f64 = 0.1;
 
+/// How much of a touching vertex's inverse mass along the contact normal
+/// the solve removes: it is 100 times heavier across the surface than
+/// along it. A full lock (1) makes the stretch block of an edge lying on a
+/// surface singular up to its tiny compliance, and the pivots lost to
+/// round-off blew short pressed strands up; at 0.99 the edges of the
+/// bed-hair press stay within 0.001 % of rest and the vertex moves across
+/// the surface by 1 % of a free vertex's correction (the projection after
+/// the solve takes that back).
+const CONTACT_LOCK: f64 = 0.99;
+
 type M3<T> = [[T; 3]; 3];
 type D3<T> = [T; 3];
 type D6<T> = [T; 6];
@@ -65,6 +75,13 @@ pub struct DirectInput<'a> {
     pub q: &'a [Quat],
     /// Vertex inverse masses (0: pinned or driven).
     pub w: &'a [f32],
+    /// Per vertex, the unit normal of a contact the solve must hardly move
+    /// the vertex along (zero: no contact), or empty when nothing touches.
+    /// The contact is folded into the vertex's inverse mass, `w (I -
+    /// CONTACT_LOCK n n^T)`: the strand keeps its length by sliding along
+    /// the surface instead of being pushed into it or having its edges
+    /// squeezed by a projection after the solve.
+    pub contact_normals: &'a [V3],
     /// Frame inverse rotational inertias across the tangent (0: fixed).
     pub w_q: &'a [f32],
     /// Frame inverse rotational inertias about the tangent (twist).
@@ -153,6 +170,11 @@ struct Factor<T> {
 #[derive(Debug, Default)]
 pub struct Direct<T> {
     w: Vec<T>,
+    /// Per vertex, its contact normal (zero: none).
+    contact: Vec<D3<T>>,
+    /// Per lane, 1 where an iteration may move the strand, 0 where it must
+    /// leave it as it is ([`Direct::set_active`]).
+    active: T,
     p: Vec<D3<T>>,
     q: Vec<[T; 4]>,
     lambda: Vec<D6<T>>,
@@ -177,6 +199,15 @@ impl<T: Real> Direct<T> {
         self.w.clear();
         self.w
             .extend((0..n).map(|i| gather::<T>(strands, |s| s.w[i] as f64)));
+        self.contact.clear();
+        self.contact.extend((0..n).map(|i| {
+            build::<T, 3>(|c| {
+                gather(strands, |s| {
+                    s.contact_normals.get(i).map_or(0.0, |v| v[c] as f64)
+                })
+            })
+        }));
+        self.active = T::splat(1.0);
         self.p.clear();
         self.p
             .extend((0..n).map(|i| build::<T, 3>(|c| gather(strands, |s| s.p[i][c] as f64))));
@@ -241,6 +272,31 @@ impl<T: Real> Direct<T> {
         }
     }
 
+    /// Lane `lane`'s contact normals, found by a projection between
+    /// iterations (zero: none).
+    pub fn set_contact_normals(&mut self, lane: usize, normals: &[V3]) {
+        for (o, v) in self.contact.iter_mut().zip(normals) {
+            for c in 0..3 {
+                let old = o[c];
+                o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
+            }
+        }
+    }
+
+    /// Whether the next iterations move lane `lane`'s strand (a strand
+    /// that needs no more iterations keeps its state, bit for bit, while
+    /// the other lanes iterate).
+    pub fn set_active(&mut self, lane: usize, active: bool) {
+        let old = self.active;
+        self.active = T::gather(|i| {
+            if i == lane {
+                f64::from(u8::from(active))
+            } else {
+                old.lane(i)
+            }
+        });
+    }
+
     pub fn positions_f32(&self, lane: usize, p: &mut [V3]) {
         for (o, v) in p.iter_mut().zip(&self.p) {
             *o = build(|c| v[c].lane(lane) as f32);
@@ -254,6 +310,7 @@ impl<T: Real> Direct<T> {
     pub fn iterate(&mut self) {
         self.forward();
         if let Some(solved) = self.backward() {
+            let solved = T::gt_select(self.active, T::splat(0.0), solved, T::splat(0.0));
             if (0..T::WIDTH).all(|i| solved.lane(i) > 0.0) {
                 // The usual case: every lane moves (the same values as
                 // selecting them).
@@ -340,6 +397,17 @@ impl<T: Real> Direct<T> {
             }
             d[3 + r][3 + r] = d[3 + r][3 + r] + c1;
         }
+        // Contacts: the vertices' inverse masses lose CONTACT_LOCK of
+        // their part along the normals.
+        let lock = T::splat(CONTACT_LOCK);
+        let (lw0, lw1) = (lock * self.w[k], lock * self.w[k + 1]);
+        let (n0, n1) = (self.contact[k], self.contact[k + 1]);
+        for r in 0..3 {
+            for col in 0..=r {
+                d[3 + r][3 + col] =
+                    d[3 + r][3 + col] - (lw0 * n0[r] * n0[col] + lw1 * n1[r] * n1[col]);
+            }
+        }
         // Right-hand side -(C + alpha~ lambda).
         let lam = self.lambda[k];
         let mut b = [zero; 6];
@@ -417,6 +485,8 @@ impl<T: Real> Direct<T> {
         let mut z_tl = [[zero; 3]; 3];
         let mut z_bl = [[zero; 3]; 3];
         let mut z_br = [[zero; 3]; 3];
+        let nk = self.contact[k];
+        let lock_w = T::splat(CONTACT_LOCK) * self.w[k];
         for col in 0..3 {
             for i in 0..3 {
                 let mut s = au[i][col];
@@ -435,11 +505,15 @@ impl<T: Real> Direct<T> {
                 }
                 z_bl[i][col] = s;
             }
-            // Rows above the diagonal stay zero.
-            z_br[col][col] = -cp.w_next;
-            for i in col + 1..3 {
-                let mut s = zero;
-                for j in col..i {
+            // -M_k = -w_k (I - CONTACT_LOCK n n^T): diagonal without a
+            // contact (then Z's bottom right stays lower triangular), full
+            // with one.
+            for i in 0..3 {
+                let mut s = lock_w * nk[i] * nk[col];
+                if i == col {
+                    s = s - cp.w_next;
+                }
+                for j in 0..i {
                     s = s - l[(3 + i, 3 + j)] * z_br[j][col];
                 }
                 z_br[i][col] = s;
@@ -463,14 +537,14 @@ impl<T: Real> Direct<T> {
             }
             for j in 0..3 {
                 let mut s = zero;
-                for r in i..3 {
+                for r in 0..3 {
                     s = s + z_br[r][i] * s_bl[r][j];
                 }
                 d[3 + i][j] = d[3 + i][j] - s;
             }
             for j in 0..=i {
                 let mut s = zero;
-                for r in i..3 {
+                for r in 0..3 {
                     s = s + z_br[r][i] * s_br[r][j];
                 }
                 d[3 + i][3 + j] = d[3 + i][3 + j] - s;
@@ -487,7 +561,7 @@ impl<T: Real> Direct<T> {
             }
             b[i] = b[i] - s;
             let mut s = zero;
-            for r in i..3 {
+            for r in 0..3 {
                 s = s + z_br[r][i] * t[3 + r];
             }
             b[3 + i] = b[3 + i] - s;
@@ -522,7 +596,7 @@ impl<T: Real> Direct<T> {
                     for j in 0..3 {
                         s = s + f.z_bl[r][j] * next[j];
                     }
-                    for j in 0..=r {
+                    for j in 0..3 {
                         s = s + f.z_br[r][j] * next[3 + j];
                     }
                     y[3 + r] = y[3 + r] - s;
@@ -575,9 +649,12 @@ impl<T: Real> Direct<T> {
                 let t = &self.factors[i].t;
                 d = [d[0] - t[3], d[1] - t[4], d[2] - t[5]];
             }
+            // M_i d = w d - CONTACT_LOCK w n (n . d).
+            let n = self.contact[i];
+            let lock_nd = T::splat(CONTACT_LOCK) * w * (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
             let p = &mut self.p[i];
             for c in 0..3 {
-                let moved = T::gt_select(w, zero, p[c] + w * d[c], p[c]);
+                let moved = T::gt_select(w, zero, p[c] + (w * d[c] - lock_nd * n[c]), p[c]);
                 p[c] = keep(moved, p[c]);
             }
         }

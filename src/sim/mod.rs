@@ -48,6 +48,8 @@
 mod bonds;
 mod colliders;
 mod constraints;
+#[cfg(test)]
+pub(crate) mod contact_tests;
 mod direct;
 mod forces;
 mod lanes;

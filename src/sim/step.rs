@@ -6,13 +6,13 @@
 //! state and commits it only if it is finite.
 
 use super::bonds::{reform, rest_darboux};
-use super::colliders::{project, PreparedCollider};
+use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
 use super::direct::{Direct, DirectInput, EdgeCompliance};
 use super::forces::{blower_dv, EdgeGrid};
-use super::lanes::{Group, LaneInput, LANES};
+use super::lanes::{Group, LaneInput, Real, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::sag_free::segment_mass;
@@ -99,6 +99,9 @@ struct Work {
     dv: Vec<V3>,
     omega: Vec<V3>,
     compliance: Vec<EdgeCompliance>,
+    /// The physical model's contacts this step: each touching vertex's
+    /// surface normal (zero: none).
+    contact_normals: Vec<V3>,
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -114,6 +117,7 @@ impl Work {
             &mut self.v,
             &mut self.dv,
             &mut self.omega,
+            &mut self.contact_normals,
         ] {
             v.resize(n, [0.0; 3]);
         }
@@ -677,23 +681,79 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
 
 impl Work {
     /// (iv) of the physical model: `iterations` Newton-XPBD iterations,
-    /// each an exact solve of the strand's linearised compliant system,
-    /// with collisions after each.
+    /// each an exact solve of the strand's linearised compliant system.
+    /// Collisions (with their friction) come before each solve and the
+    /// solve keeps them: a touching vertex moves along the surface, and
+    /// hardly across it (`contact_normals` in direct.rs). Pinning vertices that static
+    /// friction holds was tried: a strand pressed between its root and a
+    /// held tip buckled into a zig-zag the Newton iterations could not
+    /// follow (edges 50 % long). A contact
+    /// found after the last solve gets one more solve, so the step never
+    /// ends on a projection that squeezes or stretches edges.
     fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
         let m = n - 1;
+        let colliding = !ctx.colliders.is_empty();
+        self.contact_normals[..n].fill([0.0; 3]);
+        if colliding {
+            self.collide_contacts(ctx, n);
+        }
         // Taken out so the solve can borrow the rest of the working copy.
         let mut direct = std::mem::take(&mut self.direct);
         direct.begin(&[direct_input(self, n, ctx.dt)]);
-        for _ in 0..ctx.iterations {
+        for iteration in 0..ctx.iterations {
             direct.iterate();
-            if !ctx.colliders.is_empty() {
-                direct.positions_f32(0, &mut self.p[..n]);
-                self.collide(ctx, n);
-                direct.set_positions(0, &self.p[..n]);
+            if colliding {
+                let moved = self.contacts_after_iteration(&mut direct, 0, ctx, n);
+                if moved && iteration + 1 == ctx.iterations {
+                    direct.iterate();
+                }
             }
         }
         direct.end(0, &mut self.p[..n], &mut self.q[..m]);
         self.direct = direct;
+    }
+
+    /// After a solve: lane `lane`'s positions projected out of the
+    /// colliders, its contacts recorded, both handed back to the solve.
+    /// Returns whether a vertex moved.
+    fn contacts_after_iteration<T: Real>(
+        &mut self,
+        direct: &mut Direct<T>,
+        lane: usize,
+        ctx: &Context<'_>,
+        n: usize,
+    ) -> bool {
+        direct.positions_f32(lane, &mut self.p[..n]);
+        let moved = self.collide_contacts(ctx, n);
+        direct.set_positions(lane, &self.p[..n]);
+        direct.set_contact_normals(lane, &self.contact_normals[..n]);
+        moved
+    }
+
+    /// Projects the free vertices out of the colliders (with friction) and
+    /// records the contacts for the solve: a contact lasts the rest of the
+    /// step. Returns whether a vertex moved (more than a hundredth of the
+    /// hair radius).
+    fn collide_contacts(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let mut moved = false;
+        for i in 1..n {
+            if self.w[i] <= 0.0 {
+                continue;
+            }
+            let contact = project_contact(
+                ctx.colliders,
+                self.p[i],
+                Some(self.x[i]),
+                ctx.radius,
+                ctx.dt,
+            );
+            moved |= math::length(math::sub(contact.position, self.p[i])) > 0.01 * ctx.radius;
+            self.p[i] = contact.position;
+            if let Some(normal) = contact.normal {
+                self.contact_normals[i] = normal;
+            }
+        }
+        moved
     }
 }
 
@@ -704,6 +764,7 @@ fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
         p: &work.p[..n],
         q: &work.q[..m],
         w: &work.w[..n],
+        contact_normals: &work.contact_normals[..n],
         w_q: &work.w_q[..m],
         w_twist: &work.w_twist[..m],
         l: &work.l[..m],
@@ -725,20 +786,34 @@ fn step_group_direct(
 ) -> Vec<usize> {
     let n = strands[0].positions.len();
     let m = n - 1;
+    let colliding = !ctx.colliders.is_empty();
     for (s, work) in strands.iter().zip(works.iter_mut()) {
         prepare(ctx, s, work);
+        work.contact_normals[..n].fill([0.0; 3]);
+        if colliding {
+            work.collide_contacts(ctx, n);
+        }
     }
     let direct = &mut group.direct;
     direct.begin(&std::array::from_fn::<_, LANES, _>(|lane| {
         direct_input(&works[lane], n, ctx.dt)
     }));
-    for _ in 0..ctx.iterations {
+    for iteration in 0..ctx.iterations {
         direct.iterate_lanes();
-        if !ctx.colliders.is_empty() {
+        if colliding {
+            // As `solve_direct`: one more solve for the strands whose last
+            // projection moved a vertex; the others keep their state.
+            let last = iteration + 1 == ctx.iterations;
+            let mut again = false;
             for (lane, work) in works.iter_mut().enumerate() {
-                direct.positions_f32(lane, &mut work.p[..n]);
-                work.collide(ctx, n);
-                direct.set_positions(lane, &work.p[..n]);
+                let moved = work.contacts_after_iteration(direct, lane, ctx, n);
+                if last {
+                    direct.set_active(lane, moved);
+                    again |= moved;
+                }
+            }
+            if again {
+                direct.iterate_lanes();
             }
         }
     }

@@ -87,9 +87,9 @@ motion = [
 [[stage]]
 kind = "wet"
 duration = 0.2
-# Pressed until the hair under the pillow is still (at 1.5 s it still moved
-# while it dried, and the held shape was not the one the bonds remembered:
-# 0.3476 of the end shape, 0.25 of the shape at the end of drying).
+# Pressed until the hair under the pillow is still: contacts let it slide
+# along the surface, and at 1.5 s it still moved while it dried, so the held
+# shape was not the one the bonds remembered (0.35 instead of 0.33).
 [[stage]]
 kind = "press"
 duration = 3.0

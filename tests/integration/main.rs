@@ -21,4 +21,5 @@ mod install;
 mod preview;
 mod refusals;
 mod roundtrip;
+mod samples;
 mod usd;
