@@ -56,7 +56,7 @@ fn bench_steps_the_physical_model_by_default_and_the_paper_model_on_request() {
     let physical = run(&[]);
     assert_eq!(physical["model"], "physical", "{physical}");
     // The physical model's default iteration count.
-    assert_eq!(physical["iterations"], 1, "{physical}");
+    assert_eq!(physical["iterations"], 2, "{physical}");
     let ns = physical["ns_per_vertex_step"].as_f64().expect("a number");
     assert!(ns > 0.0 && ns.is_finite(), "{physical}");
     let paper = run(&["--model", "paper"]);
