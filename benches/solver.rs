@@ -16,7 +16,10 @@ fn step(c: &mut Criterion) {
         vertices: 32,
         iterations: 5,
         hair_hair: None,
+        volumetric: None,
         collider: HeadCollider::None,
+        render: None,
+        pillow: false,
     };
     let cases = [
         ("free", plain.clone()),

@@ -1,6 +1,6 @@
 //! No per-step allocation in the solver: a counting allocator counts the
 //! allocations of whole `Solver::step`s after warm-up, with hair-hair and
-//! the mesh head on, for both elastic models (the physical model's direct
+//! the mesh head and a pillow on, for both elastic models (the physical model's direct
 //! solve and the paper model's SIMD groups), on one and two threads.
 
 // A test harness: a failure to set up is a bug to see at once.
@@ -44,14 +44,14 @@ fn allocations_per_step(workload: &Workload, model: Model, threads: usize) -> Ve
         .num_threads(threads)
         .build()
         .unwrap();
-    let mut scene = workload.scene().unwrap();
-    let groom = groombake::sim::bench_groom(workload.strands, workload.vertices).unwrap();
-    let material = Material {
-        model,
-        ..Material::default()
-    };
-    scene.strands = StrandSet::from_groom(&groom, &material).unwrap();
     pool.install(|| {
+        let mut scene = workload.scene().unwrap();
+        let groom = groombake::sim::bench_groom(workload.strands, workload.vertices).unwrap();
+        let material = Material {
+            model,
+            ..Material::default()
+        };
+        scene.strands = StrandSet::from_groom(&groom, &material).unwrap();
         for _ in 0..5 {
             scene.step().unwrap();
         }
@@ -73,9 +73,12 @@ fn full() -> Workload {
         vertices: 32,
         iterations: 5,
         hair_hair: Some(5.0),
+        volumetric: None,
         collider: HeadCollider::Mesh(
             concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
         ),
+        render: None,
+        pillow: true,
     }
 }
 
@@ -87,6 +90,15 @@ fn a_solver_step_with_hair_hair_and_a_mesh_head_allocates_nothing_once_warm() {
             assert_eq!(counts, [0; 5], "{model:?} on {threads} thread(s)");
         }
     }
+    let volumetric = Workload {
+        hair_hair: None,
+        volumetric: Some(groombake::sim::Volumetric::default()),
+        ..full()
+    };
+    assert_eq!(
+        allocations_per_step(&volumetric, Model::Physical, 2),
+        [0; 5]
+    );
 }
 
 #[test]

@@ -16,6 +16,7 @@ use super::lanes::{Group, LaneInput, LANES};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
+use super::volume::VolumeGrid;
 use super::{
     Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, SimError, SolverParameters,
     StepReport, StrandSet,
@@ -30,6 +31,7 @@ pub struct Solver {
     simd: bool,
     snapshot: Vec<V3>,
     grid: EdgeGrid,
+    volume: VolumeGrid,
     dispatch: Dispatch,
 }
 
@@ -110,6 +112,8 @@ struct Context<'a> {
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
+    /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
+    volume: Option<&'a VolumeGrid>,
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
     simd: bool,
@@ -180,6 +184,7 @@ impl Solver {
             simd: true,
             snapshot: Vec::new(),
             grid: EdgeGrid::default(),
+            volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
         })
     }
@@ -262,6 +267,7 @@ impl Solver {
         let Solver {
             grid,
             snapshot,
+            volume,
             dispatch,
             simd,
             ..
@@ -275,7 +281,20 @@ impl Solver {
                 .map(|(s, f)| *s && !*f),
         );
         let active = dispatch.active.as_slice();
+        let volumetric = parameters.volumetric.map(|settings| {
+            volume.build(
+                &strands.positions,
+                &strands.velocities,
+                &strands.radii,
+                &strands.offsets,
+                active,
+                &settings,
+                parameters.dt,
+            );
+            &*volume
+        });
         let hair_hair = match parameters.hair_hair_strength {
+            _ if volumetric.is_some() => None,
             Some(alpha) if alpha > 0.0 => {
                 snapshot.clear();
                 snapshot.extend_from_slice(&strands.positions);
@@ -307,6 +326,7 @@ impl Solver {
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid, snapshot.as_slice())),
+            volume: volumetric,
             colliders: &prepared,
             root_transform: strands.root_transform,
             simd: *simd,
@@ -488,6 +508,9 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         v = math::add(v, blower_dv_here);
         if let Some((alpha, grid, _)) = ctx.hair_hair {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
+        }
+        if let Some(volume) = ctx.volume {
+            v = math::add(v, volume.dv(s.first_vertex + i));
         }
         work.p[i] = math::add(x, math::scale(v, dt));
     }

@@ -290,6 +290,9 @@ impl Timeline {
             );
         }
         if let Some(hh) = &s.hair_hair {
+            if let Some(problem) = hh.get_ref().volumetric().and_then(|v| v.problem()) {
+                return fail(hh.span(), format!("hair_hair {problem}"));
+            }
             if !(0.0..=10.0).contains(&hh.get_ref().strength) {
                 return fail(
                     hh.span(),
