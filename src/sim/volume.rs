@@ -96,6 +96,16 @@ pub struct VolumeGrid {
     dv: Vec<V3>,
 }
 
+/// `count` zero nodes in `grid`; a grid that must grow takes twice the
+/// room, so hair that spreads as it falls does not allocate every step.
+fn zeroed(grid: &mut Vec<Node>, count: usize) {
+    grid.clear();
+    if grid.capacity() < count {
+        grid.reserve_exact((2 * count).min(MAX_NODES.max(count)));
+    }
+    grid.resize(count, Node::default());
+}
+
 /// A vertex's base node and trilinear fractions, or `None` off the grid.
 #[inline]
 fn locate(p: V3, origin: V3, inv_cell: f32, dims: [usize; 3]) -> Option<([usize; 3], V3)> {
@@ -174,8 +184,7 @@ impl VolumeGrid {
             .par_iter_mut()
             .enumerate()
             .for_each(|(r, grid)| {
-                grid.clear();
-                grid.resize(count, Node::default());
+                zeroed(grid, count);
                 let first = (r * per_range).min(strands);
                 let last = ((r + 1) * per_range).min(strands);
                 for strand in first..last {
@@ -229,8 +238,7 @@ impl VolumeGrid {
                 }
             });
         // Sum the ranges' grids node by node, in range order.
-        self.nodes.clear();
-        self.nodes.resize(count, Node::default());
+        zeroed(&mut self.nodes, count);
         let partial = &self.partial[..RANGES];
         self.nodes
             .par_chunks_mut(4096)
