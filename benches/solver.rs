@@ -19,7 +19,10 @@ fn step(c: &mut Criterion) {
         model: Model::Physical,
         iterations: Model::Physical.default_iterations(),
         hair_hair: None,
+        volumetric: None,
         collider: HeadCollider::None,
+        render: None,
+        pillow: false,
     };
     let cases = [
         ("free", plain.clone()),

@@ -7,8 +7,13 @@
 //! timing cannot touch the results): the same workload is also run
 //! without hair-hair and without the collider, and each phase's share is
 //! the difference in CPU time per step. The rod solver's own phases
-//! (forces, constraints, bonds) are one share; interpolation and export
-//! are not part of this workload (reported as absent).
+//! (forces, constraints, bonds) are one share. With render hair the
+//! simulated strands are guides: every frame (24 per second) the render
+//! hairs are interpolated from them with the groom crate's
+//! [`RenderHair`] (as a bake's animated export does) and written to an
+//! animated Alembic file in the temporary folder (removed after); those
+//! two phases are timed by the process's CPU clock around them, outside
+//! the solver.
 
 use crate::sim::parry3d::math::Vector;
 use crate::sim::parry3d::shape::SharedShape;
@@ -16,6 +21,7 @@ use crate::sim::{
     self, Collider, ColliderSet, Environment, Material, Model, Pose, SimError, Solver,
     SolverParameters, StrandSet,
 };
+use groom::interpolate::{InterpolationOptions, RenderHair};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -40,7 +46,44 @@ pub struct Workload {
     pub iterations: u32,
     /// `alpha` of the hair-hair penalty (20); `None` leaves it off.
     pub hair_hair: Option<f32>,
+    /// Volumetric hair-hair (replaces the pairwise penalty when set).
+    pub volumetric: Option<crate::sim::Volumetric>,
     pub collider: HeadCollider,
+    /// Render hairs grown between the strands (which are then guides),
+    /// interpolated and exported every frame; `None`: none.
+    pub render: Option<usize>,
+    /// A pillow: a slab (8 x 40 x 40 cm) pressed against the left side of
+    /// the head, as in `samples/full_head.toml`.
+    pub pillow: bool,
+}
+
+/// The time step of every workload, seconds (the solver's default).
+pub fn step_dt() -> f32 {
+    SolverParameters::default().dt
+}
+
+/// Frames per second of the render hair's export.
+pub const EXPORT_FPS: f64 = 24.0;
+/// The most render hairs a bench may ask for (as a timeline).
+pub const MAX_RENDER: usize = crate::timeline::render::MAX_RENDER_STRANDS;
+
+impl Workload {
+    /// The full-head preset of issue 16: 5,000 guides x 32 vertices driving
+    /// 100,000 render hairs, the mesh head `head`, a pillow, hair-hair on
+    /// (alpha 5), 5 iterations (dt 1/360 is the solver's default).
+    pub fn full_head(head: PathBuf) -> Workload {
+        Workload {
+            strands: 5_000,
+            vertices: 32,
+            model: Model::Physical,
+            iterations: Model::Physical.default_iterations(),
+            hair_hair: Some(5.0),
+            volumetric: None,
+            collider: HeadCollider::Mesh(head),
+            render: Some(100_000),
+            pillow: true,
+        }
+    }
 }
 
 /// Why the workload cannot run.
@@ -63,6 +106,32 @@ pub struct Scene {
     pub strands: StrandSet,
     pub solver: Solver,
     pub colliders: ColliderSet,
+    delivery: Option<Delivery>,
+    steps: u64,
+}
+
+/// The render hair and its animated export.
+struct Delivery {
+    hair: RenderHair,
+    guide_counts: Vec<u32>,
+    writer: Option<Box<dyn exporters::FrameWriter>>,
+    path: PathBuf,
+    /// A frame every this many steps.
+    every: u64,
+    frames: usize,
+    /// CPU nanoseconds (all threads) spent in each phase so far.
+    interpolation_ns: u64,
+    export_ns: u64,
+}
+
+impl Drop for Delivery {
+    fn drop(&mut self) {
+        // An unfinished writer removes its temporary file as it drops; a
+        // finished one left the file in place.
+        if self.writer.take().is_none() {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
 }
 
 impl Workload {
@@ -77,6 +146,11 @@ impl Workload {
                 "--strands must be at least 1 and --strands x --vertices at most 50,000,000".into(),
             ));
         }
+        if self.render.is_some_and(|r| r == 0 || r > MAX_RENDER) {
+            return Err(BenchError::Input(format!(
+                "--render must be between 1 and {MAX_RENDER}"
+            )));
+        }
         Ok(())
     }
 
@@ -87,6 +161,7 @@ impl Workload {
         let solver = Solver::new(SolverParameters {
             iterations: self.iterations,
             hair_hair_strength: self.hair_hair,
+            volumetric: self.volumetric,
             ..SolverParameters::default()
         })?;
         let material = Material {
@@ -115,13 +190,96 @@ impl Workload {
         if let Some(shape) = shape {
             colliders.insert(Collider::new("head", shape, Pose::IDENTITY, 0.3));
         }
+        if self.pillow {
+            let pose = Pose::from_parts(
+                Vector::new(-0.135, 0.0, 0.0),
+                crate::sim::parry3d::math::Rot3::from_axis_angle(
+                    Vector::Z,
+                    (-10.0f32).to_radians(),
+                ),
+            );
+            let slab = SharedShape::cuboid(0.04, 0.2, 0.2);
+            colliders.insert(Collider::new("pillow", slab, pose, 0.6));
+        }
+        let delivery = match self.render {
+            Some(count) => Some(Delivery::start(&groom, &solver, count)?),
+            None => None,
+        };
         Ok(Scene {
             strands,
             solver,
             colliders,
+            delivery,
+            steps: 0,
         })
     }
 }
+
+impl Delivery {
+    /// Grows `count` render hairs between the guides (as `[groom] render`
+    /// does) and opens the animated export.
+    fn start(guides: &groom::Groom, solver: &Solver, count: usize) -> Result<Delivery, BenchError> {
+        let hair = RenderHair::grow(
+            guides,
+            count,
+            InterpolationOptions {
+                clump: 0.15,
+                noise: 0.002,
+                seed: 1,
+            },
+        );
+        let path = std::env::temp_dir().join(format!(
+            "groombake-bench-{}-{}.abc",
+            std::process::id(),
+            NEXT_EXPORT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        ));
+        let joined = hair.joined(guides);
+        let steps_per_second = 1.0 / f64::from(solver.parameters().dt);
+        let writer = exporters::animated(
+            &path,
+            &joined,
+            exporters::AnimationOptions {
+                fps: EXPORT_FPS,
+                frame_count: 1,
+            },
+        )
+        .map_err(|e| BenchError::Input(e.to_string()))?;
+        Ok(Delivery {
+            hair,
+            guide_counts: guides.strand_vertex_counts.clone(),
+            writer: Some(writer),
+            path,
+            every: (steps_per_second / EXPORT_FPS).round().max(1.0) as u64,
+            frames: 0,
+            interpolation_ns: 0,
+            export_ns: 0,
+        })
+    }
+
+    /// Interpolates the render hair of the guides' pose and writes it.
+    fn frame(&mut self, guide_points: &[[f32; 3]]) -> Result<(), BenchError> {
+        let clock = || process_cpu_ns().unwrap_or(0);
+        let start = clock();
+        let points = self.hair.joined_points(&self.guide_counts, guide_points);
+        let interpolated = clock();
+        if let Some(writer) = self.writer.as_mut() {
+            writer
+                .write_frame(&groom::Frame {
+                    time: self.frames as f64 / EXPORT_FPS,
+                    points,
+                })
+                .map_err(|e| BenchError::Input(e.to_string()))?;
+        }
+        let written = clock();
+        self.frames += 1;
+        self.interpolation_ns += interpolated.saturating_sub(start);
+        self.export_ns += written.saturating_sub(interpolated);
+        Ok(())
+    }
+}
+
+/// Distinguishes the exports of one process.
+static NEXT_EXPORT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 impl Scene {
     /// One step of the workload.
@@ -129,11 +287,23 @@ impl Scene {
         let report =
             self.solver
                 .step(&mut self.strands, &self.colliders, &Environment::default())?;
-        if report.contained.is_empty() {
-            Ok(())
-        } else {
-            Err(BenchError::NonFinite(report.contained.len()))
+        if !report.contained.is_empty() {
+            return Err(BenchError::NonFinite(report.contained.len()));
         }
+        self.steps += 1;
+        if let Some(delivery) = self.delivery.as_mut() {
+            if self.steps.is_multiple_of(delivery.every) {
+                delivery.frame(self.strands.positions())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// CPU seconds spent interpolating and exporting so far.
+    fn delivery_cpu(&self) -> (f64, f64) {
+        self.delivery.as_ref().map_or((0.0, 0.0), |d| {
+            (d.interpolation_ns as f64 * 1e-9, d.export_ns as f64 * 1e-9)
+        })
     }
 }
 
@@ -144,6 +314,9 @@ pub struct Timing {
     pub seconds: f64,
     /// CPU time of all threads of the process, when the platform says.
     pub cpu_seconds: Option<f64>,
+    /// Of that, CPU seconds interpolating the render hair and exporting it.
+    pub interpolation_seconds: f64,
+    pub export_seconds: f64,
 }
 
 impl Timing {
@@ -154,9 +327,13 @@ impl Timing {
 }
 
 /// Steps `scene` 10 times untimed, then `steps` times (by default as many
-/// as fit in about `budget` seconds) on the current thread pool.
+/// as fit in about `budget` seconds; with render hair, rounded up to whole
+/// frame periods) on the current thread pool.
 pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timing, BenchError> {
-    for _ in 0..10 {
+    // With render hair, whole frame periods: the timed steps then hold
+    // exactly one frame per period, as a bake's do.
+    let period = scene.delivery.as_ref().map_or(1, |d| d.every as usize);
+    for _ in 0..10usize.next_multiple_of(period) {
         scene.step()?;
     }
     let steps = match steps {
@@ -168,12 +345,27 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
             ((budget / one) as usize).clamp(3, 10_000)
         }
     };
+    if !scene.steps.is_multiple_of(period as u64) {
+        // The budget's probe step: back on a period boundary.
+        for _ in scene.steps % period as u64..period as u64 {
+            scene.step()?;
+        }
+    }
+    let steps = steps.next_multiple_of(period);
+    let delivered = scene.delivery_cpu();
     let cpu_start = process_cpu_ns();
     let start = Instant::now();
     for _ in 0..steps {
         scene.step()?;
     }
     let seconds = start.elapsed().as_secs_f64();
+    let (interpolation, export) = scene.delivery_cpu();
+    if let Some(writer) = scene.delivery.as_mut().and_then(|d| d.writer.take()) {
+        // The file is complete, as a bake's; `Delivery`'s drop removes it.
+        writer
+            .finish()
+            .map_err(|e| BenchError::Input(e.to_string()))?;
+    }
     let cpu_seconds = match (cpu_start, process_cpu_ns()) {
         (Some(a), Some(b)) => Some(b.saturating_sub(a) as f64 * 1e-9),
         _ => None,
@@ -182,6 +374,8 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
         steps,
         seconds,
         cpu_seconds,
+        interpolation_seconds: interpolation - delivered.0,
+        export_seconds: export - delivered.1,
     })
 }
 
@@ -223,6 +417,12 @@ impl Report {
         self.ns_per_vertex_step() / f64::from(self.workload.iterations)
     }
 
+    /// Wall seconds per simulated second (steps of `dt`, with the frames
+    /// the render hair delivers in that time).
+    pub fn seconds_per_simulated_second(&self, dt: f32) -> f64 {
+        self.timing.seconds / (self.timing.steps as f64 * f64::from(dt))
+    }
+
     /// CPU nanoseconds (all threads) per vertex per step.
     pub fn cpu_ns_per_vertex_step(&self) -> Option<f64> {
         self.timing
@@ -244,36 +444,48 @@ pub fn run(
         solver: 1.0,
         ..Shares::default()
     };
-    let with_collider = workload.collider != HeadCollider::None;
-    if workload.hair_hair.is_some() || with_collider {
+    let with_collider = workload.collider != HeadCollider::None || workload.pillow;
+    let delivering = workload.render.is_some();
+    let hair_hair_on = workload.hair_hair.is_some() || workload.volumetric.is_some();
+    if hair_hair_on || with_collider || delivering {
         let cost = |w: Workload| -> Result<f64, BenchError> {
             Ok(time(&mut w.scene()?, Some(timing.steps), budget)?.cpu_per_step())
         };
-        let total = timing.cpu_per_step();
+        let steps = timing.steps as f64;
+        let interpolation = delivering.then_some(timing.interpolation_seconds / steps);
+        let export = delivering.then_some(timing.export_seconds / steps);
+        let total = timing.cpu_per_step() - interpolation.unwrap_or(0.0) - export.unwrap_or(0.0);
         let base = cost(Workload {
             hair_hair: None,
+            volumetric: None,
             collider: HeadCollider::None,
+            pillow: false,
+            render: None,
             ..workload.clone()
         })?;
         let collisions = if with_collider {
             let with = cost(Workload {
                 hair_hair: None,
+                volumetric: None,
+                render: None,
                 ..workload.clone()
             })?;
             Some((with - base).max(0.0))
         } else {
             None
         };
-        let hair_hair = workload
-            .hair_hair
-            .map(|_| (total - base - collisions.unwrap_or(0.0)).max(0.0));
-        let sum = base + collisions.unwrap_or(0.0) + hair_hair.unwrap_or(0.0);
+        let hair_hair = hair_hair_on.then(|| (total - base - collisions.unwrap_or(0.0)).max(0.0));
+        let sum = base
+            + collisions.unwrap_or(0.0)
+            + hair_hair.unwrap_or(0.0)
+            + interpolation.unwrap_or(0.0)
+            + export.unwrap_or(0.0);
         shares = Shares {
             solver: base / sum,
             collisions: collisions.map(|c| c / sum),
             hair_hair: hair_hair.map(|h| h / sum),
-            interpolation: None,
-            export: None,
+            interpolation: interpolation.map(|i| i / sum),
+            export: export.map(|e| e / sum),
         };
     }
     Ok(Report {
@@ -317,23 +529,29 @@ mod tests {
             model: Model::Physical,
             iterations: 5,
             hair_hair,
+            volumetric: None,
             collider: HeadCollider::Mesh(
                 concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
             ),
+            render: None,
+            pillow: false,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        let mut scene = workload.scene().unwrap();
-        pool.install(|| (0..30).try_for_each(|_| scene.step()))
-            .unwrap();
-        scene
-            .strands
-            .positions()
-            .iter()
-            .flat_map(|p| p.map(f32::to_bits))
-            .collect()
+        // Built inside: a scene with render hair holds its exporter,
+        // which stays on one thread.
+        pool.install(|| {
+            let mut scene = workload.scene().unwrap();
+            (0..30).try_for_each(|_| scene.step()).unwrap();
+            scene
+                .strands
+                .positions()
+                .iter()
+                .flat_map(|p| p.map(f32::to_bits))
+                .collect()
+        })
     }
 
     #[test]
@@ -343,5 +561,43 @@ mod tests {
         assert_eq!(one, positions_bits(3, Some(5.0)));
         // Hair touched hair: the penalty changed the result.
         assert_ne!(one, positions_bits(1, None));
+    }
+
+    #[test]
+    fn render_hair_is_interpolated_and_exported_every_frame_and_the_file_removed() {
+        let workload = Workload {
+            strands: 40,
+            vertices: 8,
+            model: Model::Physical,
+            iterations: 2,
+            hair_hair: None,
+            volumetric: None,
+            collider: HeadCollider::None,
+            render: Some(400),
+            pillow: true,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let report = pool.install(|| run(&workload, Some(20), 1.0, 1)).unwrap();
+        // Whole frame periods: 20 steps become 30 (a frame every 15).
+        assert_eq!(report.timing.steps, 30);
+        let shares = report.shares;
+        assert!(shares.interpolation.is_some_and(|s| s > 0.0), "{shares:?}");
+        assert!(shares.export.is_some_and(|s| s > 0.0), "{shares:?}");
+        assert!(shares.collisions.is_some(), "the pillow is a collider");
+        let sum = shares.solver
+            + shares.collisions.unwrap_or(0.0)
+            + shares.interpolation.unwrap_or(0.0)
+            + shares.export.unwrap_or(0.0);
+        assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+        let prefix = format!("groombake-bench-{}-", std::process::id());
+        let left: Vec<_> = std::fs::read_dir(std::env::temp_dir())
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
     }
 }

@@ -1,14 +1,13 @@
-//! No per-step allocation in hair-hair and the mesh collider: a counting
-//! allocator compares the allocations of a solver step with hair-hair and
-//! the mesh head against the same step of free hair, after warm-up.
-//! (The rod solver's own step allocates a fixed number of times, for its
-//! per-strand views, active flags and rayon's chunks; that count is
-//! printed and must not grow with hair-hair or a mesh.)
+//! No per-step allocation in the solver: a counting allocator counts the
+//! allocations of whole `Solver::step`s after warm-up, with hair-hair and
+//! the mesh head and a pillow on, for both elastic models (the physical model's direct
+//! solve and the paper model's SIMD groups), on one and two threads.
 
 // A test harness: a failure to set up is a bug to see at once.
 #![allow(clippy::unwrap_used)]
 
 use groombake::bench::{HeadCollider, Workload};
+use groombake::sim::{Material, Model, StrandSet};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -36,16 +35,24 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Allocations of each of 5 steps after 20 warm-up steps, on one thread
-/// (rayon's splitting, and so its own allocations, is then fixed).
-fn allocations_per_step(workload: &Workload) -> Vec<usize> {
+/// Allocations of each of 5 steps after 5 warm-up steps on `threads`
+/// threads (the steps run inside the pool, as a bake's do). The counter
+/// is global, so the tests of this file run one at a time (see `LOCK`).
+fn allocations_per_step(workload: &Workload, model: Model, threads: usize) -> Vec<usize> {
+    let _one_at_a_time = LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .unwrap();
-    let mut scene = workload.scene().unwrap();
     pool.install(|| {
-        for _ in 0..20 {
+        let mut scene = workload.scene().unwrap();
+        let groom = groombake::sim::bench_groom(workload.strands, workload.vertices).unwrap();
+        let material = Material {
+            model,
+            ..Material::default()
+        };
+        scene.strands = StrandSet::from_groom(&groom, &material).unwrap();
+        for _ in 0..5 {
             scene.step().unwrap();
         }
         (0..5)
@@ -58,27 +65,49 @@ fn allocations_per_step(workload: &Workload) -> Vec<usize> {
     })
 }
 
-#[test]
-fn hair_hair_and_a_mesh_collider_allocate_nothing_per_step() {
-    let free = Workload {
-        strands: 400,
+static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn full() -> Workload {
+    Workload {
+        strands: 403,
         vertices: 32,
         model: groombake::sim::Model::Physical,
         iterations: 5,
-        hair_hair: None,
-        collider: HeadCollider::None,
-    };
-    let full = Workload {
         hair_hair: Some(5.0),
+        volumetric: None,
         collider: HeadCollider::Mesh(
             concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
         ),
-        ..free.clone()
+        render: None,
+        pillow: true,
+    }
+}
+
+#[test]
+fn a_solver_step_with_hair_hair_and_a_mesh_head_allocates_nothing_once_warm() {
+    for model in [Model::Physical, Model::Paper] {
+        for threads in [1, 2] {
+            let counts = allocations_per_step(&full(), model, threads);
+            assert_eq!(counts, [0; 5], "{model:?} on {threads} thread(s)");
+        }
+    }
+    let volumetric = Workload {
+        hair_hair: None,
+        volumetric: Some(groombake::sim::Volumetric::default()),
+        ..full()
     };
-    let baseline = allocations_per_step(&free);
-    let with = allocations_per_step(&full);
-    eprintln!(
-        "allocations per step: free hair {baseline:?}, with hair-hair and the mesh head {with:?}"
+    assert_eq!(
+        allocations_per_step(&volumetric, Model::Physical, 2),
+        [0; 5]
     );
-    assert_eq!(with, baseline);
+}
+
+#[test]
+fn free_hair_allocates_nothing_per_step_either() {
+    let free = Workload {
+        hair_hair: None,
+        collider: HeadCollider::None,
+        ..full()
+    };
+    assert_eq!(allocations_per_step(&free, Model::Physical, 1), [0; 5]);
 }

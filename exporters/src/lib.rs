@@ -60,7 +60,8 @@ pub struct AnimationOptions {
 }
 
 /// Takes the frames of an animated export one at a time.
-pub trait FrameWriter {
+/// `Send`: a bake or bench may hold one across its thread pool.
+pub trait FrameWriter: Send {
     /// Writes one frame; its points follow the topology of the groom given to
     /// [`animated`].
     fn write_frame(&mut self, frame: &Frame) -> Result<(), ExportError>;

@@ -10,8 +10,26 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Strands on a scalp cap.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, conflicts_with = "guides")]
     strands: usize,
+    /// Simulated guides on a scalp cap (as --strands), which drive the
+    /// render hairs of --render.
+    #[arg(long, requires = "render")]
+    guides: Option<usize>,
+    /// Render hairs grown between the guides, interpolated from them and
+    /// written to an animated Alembic file (removed after) 24 times per
+    /// simulated second, as a bake delivers them.
+    #[arg(long, value_name = "R")]
+    render: Option<usize>,
+    /// A named workload: `full-head` is 5,000 guides x 32 vertices driving
+    /// 100,000 render hairs, the mesh head samples/head.obj (or the mesh of
+    /// --collider), a pillow and hair-hair (alpha 5); it also prints the
+    /// projected cost of 5 simulated seconds.
+    #[arg(long, value_parser = ["full-head"])]
+    preset: Option<String>,
+    /// A pillow: a slab pressed against the left side of the head.
+    #[arg(long)]
+    pillow: bool,
     /// Vertices per strand.
     #[arg(long, default_value_t = 32)]
     vertices: usize,
@@ -31,6 +49,11 @@ pub struct BenchArgs {
     /// Hair-hair penalty strength alpha of (20), 0-10 (off by default).
     #[arg(long, value_name = "ALPHA")]
     hair_hair: Option<f32>,
+    /// Hair-hair mode: `pairwise` (the penalty of (20), strength from
+    /// --hair-hair) or `volumetric` (a grid of hair density and velocity,
+    /// default settings: 5 mm cells, smoothing 20 /s, repulsion 10 m^2/s^2).
+    #[arg(long, value_parser = ["pairwise", "volumetric"], default_value = "pairwise")]
+    hair_hair_mode: String,
     /// Head collider: `ball` (radius 0.08 m) or `mesh FILE` (metres, Y up,
     /// centred on the head, e.g. samples/head.obj).
     #[arg(long, num_args = 1..=2, value_names = ["KIND", "FILE"])]
@@ -66,13 +89,46 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     } else {
         Model::Physical
     };
-    let workload = Workload {
-        strands: args.strands,
-        vertices: args.vertices,
-        model,
-        iterations: args.iterations.unwrap_or(model.default_iterations()),
-        hair_hair: args.hair_hair,
-        collider: collider_of(&args.collider)?,
+    let iterations = args.iterations.unwrap_or(model.default_iterations());
+    let collider = collider_of(&args.collider)?;
+    let workload = match args.preset.as_deref() {
+        Some(_) => {
+            let head = match collider {
+                HeadCollider::Mesh(path) => path,
+                HeadCollider::None => PathBuf::from("samples/head.obj"),
+                HeadCollider::Ball => {
+                    return Err(BadInput(
+                        "--preset full-head takes a mesh head: --collider mesh FILE".into(),
+                    )
+                    .into())
+                }
+            };
+            if !head.is_file() {
+                return Err(BadInput(format!(
+                    "--preset full-head: head mesh '{}' not found (run from the repository \
+                     or give --collider mesh FILE)",
+                    head.display()
+                ))
+                .into());
+            }
+            Workload {
+                model,
+                iterations,
+                ..Workload::full_head(head)
+            }
+        }
+        None => Workload {
+            strands: args.guides.unwrap_or(args.strands),
+            vertices: args.vertices,
+            model,
+            iterations,
+            hair_hair: args.hair_hair.filter(|_| args.hair_hair_mode == "pairwise"),
+            volumetric: (args.hair_hair_mode == "volumetric" && args.hair_hair.is_some())
+                .then(groombake::sim::Volumetric::default),
+            collider,
+            render: args.render,
+            pillow: args.pillow,
+        },
     };
     workload.check().map_err(|e| BadInput(e.to_string()))?;
     if let HeadCollider::Mesh(path) = &workload.collider {
@@ -88,6 +144,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let report = pool.install(|| bench::run(&workload, args.steps, 2.0, threads))?;
     let shares = report.shares;
     let load = load_average();
+    let dt = bench::step_dt();
+    let per_simulated_second = report.seconds_per_simulated_second(dt);
+    let projected_5s = args.preset.is_some().then_some(5.0 * per_simulated_second);
     if args.json {
         let json = serde_json::json!({
             "strands": workload.strands,
@@ -96,6 +155,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "threads": threads,
             "iterations": workload.iterations,
             "hair_hair": workload.hair_hair,
+            "hair_hair_mode": if workload.volumetric.is_some() { "volumetric" } else { "pairwise" },
+            "render": workload.render,
+            "pillow": workload.pillow,
+            "dt": dt,
             "collider": match &workload.collider {
                 HeadCollider::None => None,
                 HeadCollider::Ball => Some("ball".to_string()),
@@ -117,6 +180,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 "interpolation": shares.interpolation,
                 "export": shares.export,
             },
+            "seconds_per_simulated_second": per_simulated_second,
+            "projected_5s_seconds": projected_5s,
             "peak_memory_bytes": report.peak_memory,
             "load_average": load,
         });
@@ -139,6 +204,22 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             report
                 .cpu_ns_per_vertex_step()
                 .map_or("?".to_string(), |c| format!("{c:.2}"))
+        );
+        if let Some(render) = workload.render {
+            println!(
+                "{} guides drive {render} render hairs, interpolated and exported {} times \
+                 per simulated second; pillow {}",
+                workload.strands,
+                bench::EXPORT_FPS,
+                if workload.pillow { "on" } else { "off" }
+            );
+        }
+        println!(
+            "{per_simulated_second:.1} s of wall time per simulated second (dt {dt:.6} s){}",
+            projected_5s.map_or(String::new(), |p| format!(
+                "; 5 simulated seconds projected at {p:.0} s ({:.1} min)",
+                p / 60.0
+            ))
         );
         let share = |s: Option<f64>| s.map_or("-".to_string(), |s| format!("{:.1} %", s * 100.0));
         println!(

@@ -63,6 +63,7 @@ mod state;
 mod step;
 #[cfg(test)]
 mod tests;
+mod volume;
 
 pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
@@ -71,6 +72,7 @@ pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
 pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
+pub use volume::Volumetric;
 
 use serde::{Deserialize, Serialize};
 
@@ -306,6 +308,9 @@ pub struct SolverParameters {
     pub hair_radius: f32,
     /// `alpha` of the hair-hair penalty (20); `None` switches it off.
     pub hair_hair_strength: Option<f32>,
+    /// Volumetric hair-hair for dense grooms (see [`Volumetric`]); when
+    /// set, it replaces the pairwise penalty.
+    pub volumetric: Option<Volumetric>,
     /// Velocity damping, per second (`v *= exp(-c dt)` each step).
     pub linear_damping: f32,
     /// Angular velocity damping, per second.
@@ -323,6 +328,7 @@ impl Default for SolverParameters {
             gravity: [0.0, -9.8, 0.0],
             hair_radius: 4.0e-5,
             hair_hair_strength: None,
+            volumetric: None,
             linear_damping: 2.0,
             angular_damping: 2.0,
             quaternion_mass_scale: 1.0,
@@ -355,6 +361,9 @@ impl SolverParameters {
             if !(alpha.is_finite() && alpha >= 0.0) {
                 return fail("hair_hair_strength", "must be a non-negative number");
             }
+        }
+        if let Some(problem) = self.volumetric.as_ref().and_then(Volumetric::problem) {
+            return fail("volumetric", problem);
         }
         for (name, value) in [
             ("linear_damping", self.linear_damping),

@@ -17,6 +17,7 @@ use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::sag_free::segment_mass;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
+use super::volume::VolumeGrid;
 use super::{
     Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, SimError, SolverParameters,
     StepReport, StrandSet,
@@ -31,6 +32,54 @@ pub struct Solver {
     simd: bool,
     snapshot: Vec<V3>,
     grid: EdgeGrid,
+    volume: VolumeGrid,
+    dispatch: Dispatch,
+}
+
+/// Blocks of strands stepped in parallel: a fixed number (not one per
+/// thread), so the split does not depend on the thread count; each block
+/// runs its groups of four one after the other on its own scratch.
+const BLOCKS: usize = 64;
+
+/// The scratch of the parallel dispatch, kept from step to step so a step
+/// allocates nothing once warm.
+#[derive(Default)]
+struct Dispatch {
+    /// Per strand: simulated and not frozen.
+    active: Vec<bool>,
+    /// The allocation of the per-strand views, empty between steps (see
+    /// [`recycle`]).
+    views: Vec<StrandMut<'static>>,
+    blocks: Vec<Block>,
+}
+
+impl std::fmt::Debug for Dispatch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Dispatch")
+            .field("strands", &self.active.len())
+            .field("blocks", &self.blocks.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// One block's scratch.
+#[derive(Default)]
+struct Block {
+    works: [Work; LANES],
+    group: Group,
+    /// The block's strands that failed this step (capacity for all of them).
+    failed: Vec<usize>,
+}
+
+/// An empty vector of views of any lifetime holding `views`' allocation:
+/// views borrow the strand set for one step, the buffer outlives them.
+/// (`Vec`'s in-place collect keeps the allocation, as the views of both
+/// lifetimes have one layout; tests/allocations.rs checks that it does.)
+// `filter_map` here changes the lifetime, which `filter` cannot.
+#[allow(clippy::unnecessary_filter_map)]
+fn recycle<'b>(mut views: Vec<StrandMut<'_>>) -> Vec<StrandMut<'b>> {
+    views.clear();
+    views.into_iter().filter_map(|_| None).collect()
 }
 
 /// The mutable view of one strand's state.
@@ -65,6 +114,8 @@ struct Context<'a> {
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
+    /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
+    volume: Option<&'a VolumeGrid>,
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
     simd: bool,
@@ -141,6 +192,8 @@ impl Solver {
             simd: true,
             snapshot: Vec::new(),
             grid: EdgeGrid::default(),
+            volume: VolumeGrid::default(),
+            dispatch: Dispatch::default(),
         })
     }
 
@@ -219,22 +272,41 @@ impl Solver {
             }
             strands.prime_iterations = parameters.iterations;
         }
-        let active: Vec<bool> = strands
-            .simulated
-            .iter()
-            .zip(&strands.frozen)
-            .map(|(s, f)| *s && !*f)
-            .collect();
+        let Solver {
+            grid,
+            snapshot,
+            volume,
+            dispatch,
+            simd,
+            ..
+        } = self;
+        dispatch.active.clear();
+        dispatch.active.extend(
+            strands
+                .simulated
+                .iter()
+                .zip(&strands.frozen)
+                .map(|(s, f)| *s && !*f),
+        );
+        let active = dispatch.active.as_slice();
+        let volumetric = parameters.volumetric.map(|settings| {
+            volume.build(
+                &strands.positions,
+                &strands.velocities,
+                &strands.radii,
+                &strands.offsets,
+                active,
+                &settings,
+                parameters.dt,
+            );
+            &*volume
+        });
         let hair_hair = match parameters.hair_hair_strength {
+            _ if volumetric.is_some() => None,
             Some(alpha) if alpha > 0.0 => {
-                self.snapshot.clear();
-                self.snapshot.extend_from_slice(&strands.positions);
-                self.grid.build(
-                    &self.snapshot,
-                    &strands.offsets,
-                    &active,
-                    parameters.hair_radius,
-                );
+                snapshot.clear();
+                snapshot.extend_from_slice(&strands.positions);
+                grid.build(snapshot, &strands.offsets, active, parameters.hair_radius);
                 Some(alpha)
             }
             _ => None,
@@ -261,10 +333,11 @@ impl Solver {
             targets: environment.bond_rate_targets,
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
-            hair_hair: hair_hair.map(|alpha| (alpha, &self.grid, self.snapshot.as_slice())),
+            hair_hair: hair_hair.map(|alpha| (alpha, &*grid, snapshot.as_slice())),
+            volume: volumetric,
             colliders: &prepared,
             root_transform: strands.root_transform,
-            simd: self.simd,
+            simd: *simd,
             physical: match strands.material.model {
                 Model::Paper => None,
                 Model::Physical => Some(Physical {
@@ -274,25 +347,45 @@ impl Solver {
                 }),
             },
         };
-        let mut views = split_strands(strands, &active);
+        let mut views = recycle(std::mem::take(&mut dispatch.views));
+        split_strands(strands, active, &mut views);
         // Strands of one vertex count next to each other so groups of four
         // are uniform (SIMD) even in grooms of mixed lengths; the order is
-        // fixed by the data, and a strand's result does not depend on its
-        // group anyway.
-        views.sort_by_key(|v| (!v.active, v.positions.len(), v.index));
-        // Strands go in groups of four (see `step_group`); a strand's
-        // result does not depend on its group, so not on the thread count.
-        let failed: Vec<usize> = views
-            .into_par_iter()
-            .chunks(LANES)
-            .with_min_len(4)
-            .map_init(
-                || (std::array::from_fn(|_| Work::default()), Group::default()),
-                |(works, group), strands| step_group(&context, strands, works, group),
-            )
-            .flat_map_iter(|f| f.into_iter())
+        // fixed by the data (the keys are unique, so an unstable sort, which
+        // needs no buffer, gives one order), and a strand's result does not
+        // depend on its group anyway.
+        views.sort_unstable_by_key(|v| (!v.active, v.positions.len(), v.index));
+        // Strands go in groups of four (see `step_group`), groups in a fixed
+        // number of blocks; a strand's result does not depend on its group
+        // or block, so not on the thread count.
+        let groups = views.len().div_ceil(LANES);
+        let block_strands = groups.div_ceil(BLOCKS).max(1) * LANES;
+        let block_count = views.len().div_ceil(block_strands);
+        if dispatch.blocks.len() < block_count {
+            dispatch.blocks.resize_with(block_count, Block::default);
+        }
+        views
+            .par_chunks_mut(block_strands)
+            .zip(dispatch.blocks.par_iter_mut())
+            .for_each(|(strands, block)| {
+                block.failed.clear();
+                block.failed.reserve(strands.len());
+                for group in strands.chunks_mut(LANES) {
+                    step_group(
+                        &context,
+                        group,
+                        &mut block.works,
+                        &mut block.group,
+                        &mut block.failed,
+                    );
+                }
+            });
+        dispatch.views = recycle(views);
+        // Allocates only when a strand failed.
+        let mut failed: Vec<usize> = dispatch.blocks[..block_count]
+            .iter()
+            .flat_map(|b| b.failed.iter().copied())
             .collect();
-        let mut failed = failed;
         failed.sort_unstable();
         for &strand in &failed {
             strands.frozen[strand] = true;
@@ -304,8 +397,8 @@ impl Solver {
     }
 }
 
-/// Cuts the flat arrays into one view per strand.
-fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandMut<'a>> {
+/// Cuts the flat arrays into one view per strand, into `views` (empty).
+fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Vec<StrandMut<'a>>) {
     let StrandSet {
         offsets,
         roots,
@@ -325,7 +418,7 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
     let mut joints = joints.as_mut_slice();
     let mut controls = controls.as_slice();
     let mut radii = radii.as_slice();
-    let mut views = Vec::with_capacity(roots.len());
+    views.reserve(roots.len());
     for (index, w) in offsets.windows(2).enumerate() {
         let n = w[1] - w[0];
         let (p, rest_p) = std::mem::take(&mut positions).split_at_mut(n);
@@ -356,7 +449,25 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool]) -> Vec<StrandM
             radii: r,
         });
     }
-    views
+}
+
+impl StrandMut<'_> {
+    /// The same view for a shorter borrow (to step a strand of a slice).
+    fn reborrow(&mut self) -> StrandMut<'_> {
+        StrandMut {
+            index: self.index,
+            active: self.active,
+            root: self.root,
+            first_vertex: self.first_vertex,
+            positions: self.positions,
+            velocities: self.velocities,
+            velocity_corrections: self.velocity_corrections,
+            edges: self.edges,
+            joints: self.joints,
+            controls: self.controls,
+            radii: self.radii,
+        }
+    }
 }
 
 /// Fills the working copy: (ii) external forces and predicted positions
@@ -411,6 +522,9 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         v = math::add(v, blower_dv_here);
         if let Some((alpha, grid, _)) = ctx.hair_hair {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
+        }
+        if let Some(volume) = ctx.volume {
+            v = math::add(v, volume.dv(s.first_vertex + i));
         }
         work.p[i] = math::add(x, math::scale(v, dt));
     }
@@ -780,10 +894,11 @@ fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
 /// the rest per strand. Returns the failed ones.
 fn step_group_direct(
     ctx: &Context<'_>,
-    strands: Vec<StrandMut<'_>>,
+    strands: &mut [StrandMut<'_>],
     works: &mut [Work; LANES],
     group: &mut Group,
-) -> Vec<usize> {
+    failed: &mut Vec<usize>,
+) {
     let n = strands[0].positions.len();
     let m = n - 1;
     let colliding = !ctx.colliders.is_empty();
@@ -817,43 +932,43 @@ fn step_group_direct(
             }
         }
     }
-    let mut failed = Vec::new();
-    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+    for (lane, (s, work)) in strands.iter_mut().zip(works.iter_mut()).enumerate() {
         direct.end(lane, &mut work.p[..n], &mut work.q[..m]);
         let index = s.index;
-        if !finish(ctx, s, work, false) {
+        if !finish(ctx, s.reborrow(), work, false) {
             failed.push(index);
         }
     }
-    failed
 }
 
 /// Four strands' steps with their constraint sweeps in SIMD lanes when
 /// they are all active and of one vertex count (bit-identical to
-/// `step_strand` on each); otherwise one by one. Returns the failed ones.
+/// `step_strand` on each); otherwise one by one. Adds the failed ones to
+/// `failed`.
 fn step_group(
     ctx: &Context<'_>,
-    strands: Vec<StrandMut<'_>>,
+    strands: &mut [StrandMut<'_>],
     works: &mut [Work; LANES],
     group: &mut Group,
-) -> Vec<usize> {
+    failed: &mut Vec<usize>,
+) {
     let n = strands.first().map_or(0, |s| s.positions.len());
     let uniform = ctx.simd
         && strands.len() == LANES
         && n >= 2
         && strands.iter().all(|s| s.active && s.positions.len() == n);
-    let mut failed = Vec::new();
     if !uniform {
-        for (s, work) in strands.into_iter().zip(works.iter_mut()) {
+        for (s, work) in strands.iter_mut().zip(works.iter_mut()) {
             let index = s.index;
-            if s.active && !step_strand(ctx, s, work) {
+            if s.active && !step_strand(ctx, s.reborrow(), work) {
                 failed.push(index);
             }
         }
-        return failed;
+        return;
     }
     if ctx.physical.is_some() {
-        return step_group_direct(ctx, strands, works, group);
+        step_group_direct(ctx, strands, works, group, failed);
+        return;
     }
     for (s, work) in strands.iter().zip(works.iter_mut()) {
         prepare(ctx, s, work);
@@ -875,17 +990,16 @@ fn step_group(
     if ftl_done {
         group.follow_the_leader();
     }
-    for (lane, (s, work)) in strands.into_iter().zip(works.iter_mut()).enumerate() {
+    for (lane, (s, work)) in strands.iter_mut().zip(works.iter_mut()).enumerate() {
         group.store(lane, &mut work.p[..n], &mut work.q[..m]);
         if ftl_done {
             group.store_corrections(lane, &mut work.corrections[..n]);
         }
         let index = s.index;
-        if !finish(ctx, s, work, ftl_done) {
+        if !finish(ctx, s.reborrow(), work, ftl_done) {
             failed.push(index);
         }
     }
-    failed
 }
 
 fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {

@@ -191,7 +191,13 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
         ),
         gravity: s.gravity,
         hair_radius: *s.hair_radius.get_ref(),
-        hair_hair_strength: s.hair_hair.as_ref().map(|h| h.get_ref().strength),
+        hair_hair_strength: s
+            .hair_hair
+            .as_ref()
+            .map(|h| h.get_ref())
+            .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
+            .map(|h| h.strength),
+        volumetric: s.hair_hair.as_ref().and_then(|h| h.get_ref().volumetric()),
         linear_damping: damping.linear,
         angular_damping: damping.angular,
         quaternion_mass_scale: *s.quaternion_mass_scale.get_ref(),

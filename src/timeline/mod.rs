@@ -292,6 +292,9 @@ impl Timeline {
             );
         }
         if let Some(hh) = &s.hair_hair {
+            if let Some(problem) = hh.get_ref().volumetric().and_then(|v| v.problem()) {
+                return fail(hh.span(), format!("hair_hair {problem}"));
+            }
             if !(0.0..=10.0).contains(&hh.get_ref().strength) {
                 return fail(
                     hh.span(),
@@ -792,6 +795,32 @@ duration = 0.5
         let e = load_text(&text).unwrap_err();
         assert_eq!(e.line, 3);
         assert!(e.message.contains("not found"), "{e}");
+    }
+
+    #[test]
+    fn volumetric_hair_hair_reaches_the_solver_and_a_bad_cell_size_is_named() {
+        let text = format!(
+            "{GOOD}\n[solver]\nhair_hair = {{ mode = \"volumetric\", cell_size = 0.004 }}\n"
+        );
+        let t = load_text(&text).unwrap();
+        let parameters = bake::parameters_of(&t);
+        assert_eq!(parameters.hair_hair_strength, None);
+        let volumetric = parameters.volumetric.unwrap();
+        assert_eq!(volumetric.cell_size, 0.004);
+        assert_eq!(
+            volumetric.smoothing,
+            crate::sim::Volumetric::default().smoothing
+        );
+        let e = load_text(&text.replace("0.004", "2.0")).unwrap_err();
+        assert!(e.message.contains("cell_size must be"), "{e}");
+        // The pairwise mode (the default) keeps its strength.
+        let pairwise = load_text(&format!(
+            "{GOOD}\n[solver]\nhair_hair = {{ strength = 5.0 }}\n"
+        ))
+        .unwrap();
+        let parameters = bake::parameters_of(&pairwise);
+        assert_eq!(parameters.hair_hair_strength, Some(5.0));
+        assert_eq!(parameters.volumetric, None);
     }
 
     #[test]

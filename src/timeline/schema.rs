@@ -189,11 +189,43 @@ pub struct DampingSpec {
     pub angular: f32,
 }
 
-/// Hair-hair penalty of (20).
+/// Hair-hair: the pairwise penalty of (20) (guides, sparse hair) or the
+/// volumetric mode (dense grooms; `crate::sim::Volumetric`).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HairHairSpec {
+    #[serde(default)]
+    pub mode: HairHairMode,
+    /// `alpha` of (20), m/s^2 (pairwise mode).
+    #[serde(default)]
     pub strength: f32,
+    /// Grid cell edge, metres (volumetric mode).
+    pub cell_size: Option<f32>,
+    /// Velocity smoothing rate, per second (volumetric mode).
+    pub smoothing: Option<f32>,
+    /// Push down the hair's volume fraction gradient, m^2/s^2 (volumetric).
+    pub repulsion: Option<f32>,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HairHairMode {
+    #[default]
+    Pairwise,
+    Volumetric,
+}
+
+impl HairHairSpec {
+    /// The volumetric mode's settings (defaults where not given), or
+    /// `None` in the pairwise mode.
+    pub fn volumetric(&self) -> Option<crate::sim::Volumetric> {
+        let default = crate::sim::Volumetric::default();
+        (self.mode == HairHairMode::Volumetric).then(|| crate::sim::Volumetric {
+            cell_size: self.cell_size.unwrap_or(default.cell_size),
+            smoothing: self.smoothing.unwrap_or(default.smoothing),
+            repulsion: self.repulsion.unwrap_or(default.repulsion),
+        })
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
