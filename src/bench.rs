@@ -69,8 +69,9 @@ pub const MAX_RENDER: usize = crate::timeline::render::MAX_RENDER_STRANDS;
 
 impl Workload {
     /// The full-head preset of issue 16: 5,000 guides x 32 vertices driving
-    /// 100,000 render hairs, the mesh head `head`, a pillow, hair-hair on
-    /// (alpha 5), 5 iterations (dt 1/360 is the solver's default).
+    /// 100,000 render hairs, the mesh head `head`, a pillow, pairwise
+    /// hair-hair on (alpha 5), the physical model at its default iterations
+    /// (dt 1/360 is the solver's default).
     pub fn full_head(head: PathBuf) -> Workload {
         Workload {
             strands: 5_000,

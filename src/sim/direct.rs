@@ -264,23 +264,13 @@ impl<T: Real> Direct<T> {
     /// Lane `lane`'s positions, moved by something else (collisions)
     /// between iterations.
     pub fn set_positions(&mut self, lane: usize, p: &[V3]) {
-        for (o, v) in self.p.iter_mut().zip(p) {
-            for c in 0..3 {
-                let old = o[c];
-                o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
-            }
-        }
+        set_lane(&mut self.p, lane, p);
     }
 
     /// Lane `lane`'s contact normals, found by a projection between
     /// iterations (zero: none).
     pub fn set_contact_normals(&mut self, lane: usize, normals: &[V3]) {
-        for (o, v) in self.contact.iter_mut().zip(normals) {
-            for c in 0..3 {
-                let old = o[c];
-                o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
-            }
-        }
+        set_lane(&mut self.contact, lane, normals);
     }
 
     /// Whether the next iterations move lane `lane`'s strand (a strand
@@ -712,6 +702,17 @@ impl Direct<F64x4> {
     #[target_feature(enable = "avx2")]
     fn iterate_avx2(&mut self) {
         self.iterate();
+    }
+}
+
+/// Replaces lane `lane` of every vector in `to` with `from`'s (f32 in),
+/// leaving the other lanes as they are.
+fn set_lane<T: Real>(to: &mut [D3<T>], lane: usize, from: &[V3]) {
+    for (o, v) in to.iter_mut().zip(from) {
+        for c in 0..3 {
+            let old = o[c];
+            o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
+        }
     }
 }
 

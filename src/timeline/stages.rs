@@ -7,6 +7,7 @@ use super::schema::{BondDriveSpec, StageKind, StageSpec, WindSpec};
 use super::BOND_NAMES;
 use crate::sim::{Blower, Environment, Gravity, StrandSet};
 use crate::stochastic_wind::StochasticWind;
+use groom::math::double::{cross, length as norm, sub};
 
 /// A drive of one quantity (a bond rate or wetness) toward a target, active
 /// from `start` for `time` seconds of the stage.
@@ -252,22 +253,10 @@ struct RodStrand {
     axis: [f64; 3],
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
+/// The unit vector along `a`, or `None` when it is shorter than 1e-12 m.
 fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
     let n = norm(a);
     (n > 1e-12).then(|| a.map(|c| c / n))
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 impl PermRods {
