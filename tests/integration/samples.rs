@@ -12,13 +12,18 @@ fn variant(name: &str, strands: usize, edit: impl Fn(String) -> String) -> Strin
     let text = std::fs::read_to_string(sample(name)).unwrap();
     let text = edit(text);
     let (head, _) = text.split_at(text.find("[[export]]").expect("an export"));
-    let head = head.replacen(
-        &format!("strands = {}", if name == "perm.toml" { 100 } else { 200 }),
-        &format!("strands = {strands}"),
-        1,
-    );
-    assert!(head.contains(&format!("strands = {strands}")), "{name}");
+    let head = with_strand_count(head, strands);
     format!("{head}[[export]]\npath = \"final.glb\"\nwhat = \"final\"\n")
+}
+
+/// `text` with the generator's `strands = N` set to `strands`.
+fn with_strand_count(text: &str, strands: usize) -> String {
+    let key = "strands = ";
+    let start = text.find(key).expect("a generated groom") + key.len();
+    let digits = text[start..]
+        .find(|c: char| !c.is_ascii_digit())
+        .expect("a strand count");
+    format!("{}{strands}{}", &text[..start], &text[start + digits..])
 }
 
 /// Bakes `timeline` in a fresh directory and reads its final pose.
@@ -47,19 +52,67 @@ fn distance(a: [f32; 3], b: [f32; 3]) -> f64 {
         .sqrt()
 }
 
-/// Mean distance of the tips from where they hang at the start: straight
-/// down from the root by the strand's length (the swatch generator's
-/// groom).
-fn mean_tip_displacement(groom: &Groom, length: f32) -> f64 {
-    let mut total = 0.0;
-    let mut count = 0;
-    for s in groom.strands() {
-        let root = s[0];
-        let start = [root[0], root[1] - length, root[2]];
-        total += distance(s[s.len() - 1], start);
-        count += 1;
+/// Where the tips of a swatch hang at the start: straight down from the
+/// root by the strand's length (the swatch generator's groom).
+fn hanging_tips(groom: &Groom, length: f32) -> Vec<[f32; 3]> {
+    groom
+        .strands()
+        .map(|s| [s[0][0], s[0][1] - length, s[0][2]])
+        .collect()
+}
+
+/// How far a press moved the tips and how much of it they keep, averaged
+/// over the strands: `pushed` the distance of the tips from `starts` while
+/// pressed, `kept` the part of their displacement after release that lies
+/// along each strand's own push (negative if the set points the other
+/// way), and both displacements' mean vectors.
+struct TipPush {
+    strands: usize,
+    pushed: f64,
+    kept: f64,
+    pushed_mean: [f64; 3],
+    kept_mean: [f64; 3],
+}
+
+fn tip_push(starts: &[[f32; 3]], pressed: &Groom, released: &Groom) -> TipPush {
+    let mut out = TipPush {
+        strands: starts.len(),
+        pushed: 0.0,
+        kept: 0.0,
+        pushed_mean: [0.0; 3],
+        kept_mean: [0.0; 3],
+    };
+    let tips = |g: &Groom| -> Vec<[f32; 3]> { g.strands().map(|s| s[s.len() - 1]).collect() };
+    let (pressed, released) = (tips(pressed), tips(released));
+    assert_eq!(
+        (pressed.len(), released.len()),
+        (starts.len(), starts.len())
+    );
+    let n = starts.len() as f64;
+    for ((s, p), r) in starts.iter().zip(&pressed).zip(&released) {
+        let push: [f64; 3] = std::array::from_fn(|k| (p[k] - s[k]) as f64);
+        let keep: [f64; 3] = std::array::from_fn(|k| (r[k] - s[k]) as f64);
+        let size = distance(*p, *s);
+        out.pushed += size / n;
+        out.kept += (0..3).map(|k| keep[k] * push[k]).sum::<f64>() / size.max(1e-12) / n;
+        for k in 0..3 {
+            out.pushed_mean[k] += push[k] / n;
+            out.kept_mean[k] += keep[k] / n;
+        }
     }
-    total / count as f64
+    out
+}
+
+/// Mean distance of the tips from where they hang at the start.
+fn mean_tip_displacement(groom: &Groom, length: f32) -> f64 {
+    let starts = hanging_tips(groom, length);
+    let tips = groom.strands().map(|s| s[s.len() - 1]);
+    starts
+        .iter()
+        .zip(tips)
+        .map(|(s, t)| distance(*s, t))
+        .sum::<f64>()
+        / starts.len() as f64
 }
 
 #[test]
@@ -71,17 +124,27 @@ fn bed_hair_keeps_its_bend_after_release_under_gravity() {
         without_stage(t, "release")
     }));
     let released = bake_final(&variant("bed_hair.toml", 8, |t| t));
-    let held = mean_tip_displacement(&pressed, 0.04);
+    let push = tip_push(&hanging_tips(&pressed, 0.04), &pressed, &released);
+    let held = push.pushed;
     let kept = mean_tip_displacement(&released, 0.04);
     eprintln!(
-        "bed_hair: tips {:.2} cm from the start under the pillow, {:.2} cm after release: {:.2}",
+        "bed_hair: tips {:.2} cm from the start under the pillow, {:.2} cm after release: {:.2}; \
+         {:.2} cm along the push: {:.2}",
         held * 100.0,
         kept * 100.0,
-        kept / held
+        kept / held,
+        push.kept * 100.0,
+        push.kept / held
     );
     // The pillow pressed the hair visibly (4 cm strands).
     assert!(held > 0.015, "{held}");
     assert!(kept >= 0.25 * held, "kept {kept} of {held}");
+    // The way the pillow pushed them, not mirrored.
+    assert!(
+        push.kept >= 0.2 * held,
+        "kept {} along the push of {held}",
+        push.kept
+    );
 }
 
 /// Coherent turns of a polyline: `|sum of the rotation vectors between
@@ -161,4 +224,69 @@ fn perm_strands_are_coils_after_release_under_gravity() {
     assert!(on_rod > 1.5, "the rod made {on_rod} turns");
     assert!(after >= 0.5 * on_rod, "kept {after} of {on_rod} turns");
     assert!(longest_edge <= 0.01, "{longest_edge}");
+}
+
+/// The full head (guides only, fewer of them: without hair-hair the guides
+/// do not interact, and the generator grows the same first strands for any
+/// count): the pillow flattens the left side while the hair dries, and
+/// after release, under gravity, that side keeps a share of the push in the
+/// direction the pillow pushed it.
+#[test]
+fn full_head_keeps_the_pillow_side_flattened_after_release_under_gravity() {
+    let guides_only = |t: String| {
+        let start = t.find("render = {").expect("render hair");
+        let end = start + t[start..].find('\n').unwrap() + 1;
+        format!("{}{}", &t[..start], &t[end..])
+    };
+    let released_timeline = variant("full_head.toml", 300, guides_only);
+    // The start: the generated groom (the sag-free start holds it there).
+    let dir = TestDir::new();
+    let timeline =
+        groombake::timeline::Timeline::parse(&dir.path("t.toml"), released_timeline.clone())
+            .expect("the sample parses");
+    let start = groombake::timeline::bake::load_groom(&timeline).expect("the generated groom");
+    // The pillow holds from 0.9 s to the end of the dry stage and only then
+    // leaves: the end of the dry stage is the most it pushes.
+    let pressed = bake_final(&variant("full_head.toml", 300, |t| {
+        without_stage(guides_only(t), "release")
+    }));
+    let released = bake_final(&released_timeline);
+
+    // The strands rooted on the pillow's side of the head.
+    let side = |g: &Groom| -> Groom {
+        let kept: Vec<Vec<[f32; 3]>> = g
+            .strands()
+            .zip(start.strands())
+            .filter(|(_, s)| s[0][0] < -0.06)
+            .map(|(strand, _)| strand.to_vec())
+            .collect();
+        Groom::from_strands(&kept)
+    };
+    let starts: Vec<[f32; 3]> = side(&start).strands().map(|s| s[s.len() - 1]).collect();
+    let push = tip_push(&starts, &side(&pressed), &side(&released));
+    let count = push.strands;
+    let (pushed, kept) = (push.pushed, push.kept);
+    let (pushed_x, kept_x) = (push.pushed_mean[0], push.kept_mean[0]);
+    eprintln!(
+        "full_head: {count} strands on the pillow side; tips {:.2} cm from the start under the pillow \
+         ({:.2} cm toward +X), after release {:.2} cm along the push ({:.2} cm toward +X): {:.2}",
+        pushed * 100.0,
+        pushed_x * 100.0,
+        kept * 100.0,
+        kept_x * 100.0,
+        kept / pushed
+    );
+    assert!(count >= 20, "{count} strands on the pillow side");
+    // The pillow pushed the left side visibly, toward the head (+X).
+    assert!(pushed > 0.02, "{pushed}");
+    assert!(
+        pushed_x > 0.5 * pushed,
+        "pushed {pushed_x} toward +X of {pushed}"
+    );
+    // After release the tips keep a quarter of the push, the same way.
+    assert!(kept >= 0.25 * pushed, "kept {kept} of {pushed}");
+    assert!(
+        kept_x >= 0.2 * pushed_x,
+        "kept {kept_x} toward +X of {pushed_x}"
+    );
 }
