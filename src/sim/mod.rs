@@ -23,7 +23,8 @@
 //!   bit-identical for any thread count.
 //! - Before the first step the caller may solve the sag-free rest shape
 //!   (`StrandSet::make_sag_free`, sag_free.rs): the groom then stands still
-//!   under gravity (physical model).
+//!   under gravity (physical model), except strands a lone hair cannot
+//!   hold, which `make_sag_free_checked` names.
 //! - The state's velocity is the real one, `(x_new - x_old) / dt`; the
 //!   Follow-The-Leader correction (paper model) is kept apart and applied
 //!   to the next prediction only.

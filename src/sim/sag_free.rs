@@ -21,6 +21,20 @@
 //! the authored shape standing under gravity. The clamp at the root keeps
 //! its own rest Darboux vector per strand (`RootAnchor::rest`).
 //!
+//! Standing is not always stable. The balance is exact (a step from it
+//! moves a vertex by f32 round-off, 4e-8 m), but an exact equilibrium of
+//! a long heavy rod can be unstable: an upright column buckles beyond
+//! Greenhill's length `L_crit = (7.837 EI / w)^(1/3)` (9.5 cm for real
+//! hair of 40 um), and a strand held out across gravity or curved needs a
+//! strong natural curl (up to 240 /m, a 4 mm radius, for 24 cm of hair
+//! held out 10 cm) whose plane gravity then turns over through the cheap
+//! twist (`GJ` is about `EI / 1.3`). The start checks this by physics, not
+//! by formula: `make_sag_free_checked` lets the solved strands stand alone
+//! (no contacts, no hair-hair) for `PROBE_SECONDS` under the bake's solver
+//! from a small push and names those that move `PROBE_DRIFT` or more. Only
+//! strands longer than half their Greenhill length are probed: below it
+//! `w L^3 / EI < 1`, an eighth of what buckles the most vulnerable shape.
+//!
 //! Stretch is not compensated: an edge carries at most the weight of its
 //! strand, `rho A g L` (1.6e-5 N for 24 cm of real hair), against `E A`
 //! of about 17.6 N, a strain of 1e-6; the report gives the largest tip
@@ -28,13 +42,30 @@
 
 use super::math::{self, V3};
 use super::step::bend_flexibility;
-use super::{Model, StrandSet};
+use super::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
 
 /// The largest rest Darboux vector the start writes (`sin` of half the
 /// turn at a joint: 0.95 is a 144 degree turn). A strand whose balance
 /// needs more (long hair held out straight: a 24 cm real hair cannot stand
 /// horizontal) is held as far as that allows and counted.
 const MAX_REST: f64 = 0.95;
+
+/// How long the stability probe lets the solved strands stand, seconds.
+pub const PROBE_SECONDS: f32 = 0.5;
+/// The speed of the probe's push, m/s: a stable strand answers it with a
+/// sway of about `PROBE_SPEED / omega` (0.2 mm for the slowest, a 24 cm
+/// hair's pendulum at 5 rad/s); an unstable one grows by `exp(lambda t)`.
+pub const PROBE_SPEED: f32 = 1.0e-3;
+/// A probed strand that moves this far (metres) cannot stand alone.
+pub const PROBE_DRIFT: f32 = 1.0e-3;
+
+/// Greenhill's critical length of a heavy upright column clamped at its
+/// base, `(7.837 EI / w)^(1/3)` with `EI = E pi r^4 / 4` and `w = rho pi
+/// r^2 g`: metres, for Young's modulus `youngs` (Pa), fibre radius
+/// `radius` (m), `density` (kg/m^3) and gravity `gravity` (m/s^2).
+pub fn greenhill_length(youngs: f64, radius: f64, density: f64, gravity: f64) -> f64 {
+    (7.837 * youngs * radius * radius / (4.0 * density * gravity)).cbrt()
+}
 
 /// What the sag-free start did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -48,6 +79,33 @@ pub struct SagFreeReport {
     /// The largest tip shift the weight's stretch of the edges makes,
     /// metres (not compensated; negligible for hair).
     pub max_stretch: f64,
+    /// Strands that moved `PROBE_DRIFT` or more standing alone for
+    /// `PROBE_SECONDS` (only filled by `make_sag_free_checked`).
+    pub unstable: Vec<usize>,
+}
+
+impl SagFreeReport {
+    /// The TD's one line about the strands that cannot stand as groomed,
+    /// or `None` when all can.
+    pub fn warning(&self) -> Option<String> {
+        let first: Vec<String> = self
+            .unstable
+            .iter()
+            .take(8)
+            .map(|s| s.to_string())
+            .collect();
+        (!self.unstable.is_empty()).then(|| {
+            format!(
+                "sag-free: {} of {} strands cannot stand as groomed as lone hairs (strands {}{}): standing alone they move {} mm or more within {} s under gravity; thicker or stiffer hair ([material] radius, youngs_modulus), a shorter reach, or neighbours that hold them keep them",
+                self.unstable.len(),
+                self.strands,
+                first.join(", "),
+                if self.unstable.len() > first.len() { ", ..." } else { "" },
+                PROBE_DRIFT * 1e3,
+                PROBE_SECONDS
+            )
+        })
+    }
 }
 
 type D3 = [f64; 3];
@@ -199,6 +257,90 @@ impl StrandSet {
             report.strands += 1;
         }
         report
+    }
+
+    /// `make_sag_free` under `parameters.gravity`, then the stability probe
+    /// (module doc) with the bake's time step, iterations and damping.
+    pub fn make_sag_free_checked(
+        &mut self,
+        parameters: &SolverParameters,
+    ) -> Result<SagFreeReport, SimError> {
+        let mut report = self.make_sag_free(parameters.gravity);
+        if report.strands > 0 {
+            report.unstable = self.unstable_standing(parameters)?;
+        }
+        Ok(report)
+    }
+
+    /// The probe: a copy of the strands longer than half their Greenhill
+    /// length stands alone for `PROBE_SECONDS` after a push of
+    /// `PROBE_SPEED` on every free vertex; the strands that move
+    /// `PROBE_DRIFT` or more, in order.
+    fn unstable_standing(&self, parameters: &SolverParameters) -> Result<Vec<usize>, SimError> {
+        let g = d3(parameters.gravity);
+        let g = dot(g, g).sqrt();
+        if g == 0.0 {
+            return Ok(Vec::new());
+        }
+        let mut probe = self.clone();
+        let push = PROBE_SPEED / 3.0f32.sqrt();
+        let mut probed = Vec::new();
+        for strand in 0..self.strand_count() {
+            if !self.simulated[strand] || self.frozen[strand] {
+                continue;
+            }
+            let (first, end) = (self.offsets[strand], self.offsets[strand + 1]);
+            let length: f64 = self.edges[first..end - 1]
+                .iter()
+                .map(|e| e.rest_length as f64)
+                .sum();
+            let radius = self.radii[first..end]
+                .iter()
+                .map(|r| *r as f64)
+                .sum::<f64>()
+                / (end - first) as f64;
+            // The weakest modulus along the strand (the cuticle's gradient).
+            let cuticle = self.joints[first + 1..end - 1]
+                .iter()
+                .map(|j| j.cuticle as f64)
+                .fold(1.0, f64::min);
+            let critical = greenhill_length(
+                self.material.youngs_modulus as f64 * cuticle,
+                radius,
+                self.material.density as f64,
+                g,
+            );
+            if length < 0.5 * critical {
+                probe.simulated[strand] = false;
+                continue;
+            }
+            probed.push(strand);
+            for v in &mut probe.velocities[first + 1..end] {
+                *v = [push; 3];
+            }
+        }
+        if probed.is_empty() {
+            return Ok(probed);
+        }
+        let lone = SolverParameters {
+            hair_hair_strength: None,
+            volumetric: None,
+            ..*parameters
+        };
+        let mut solver = Solver::new(lone)?;
+        let colliders = ColliderSet::new();
+        let start = probe.positions.clone();
+        let mut moved = vec![false; self.strand_count()];
+        for _ in 0..(PROBE_SECONDS / lone.dt).ceil() as usize {
+            solver.step(&mut probe, &colliders, &Environment::default())?;
+            for &strand in &probed {
+                let range = probe.offsets[strand]..probe.offsets[strand + 1];
+                moved[strand] |= range
+                    .into_iter()
+                    .any(|v| math::length(math::sub(probe.positions[v], start[v])) >= PROBE_DRIFT);
+            }
+        }
+        Ok(probed.into_iter().filter(|s| moved[*s]).collect())
     }
 
     /// Moves every bond memory of joint `j` by one offset so that the rest

@@ -160,6 +160,8 @@ pub struct Prepared {
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
     pub seed: u64,
+    /// What the sag-free start did (`None`: off, or a continued bake).
+    pub sag_free: Option<sim::SagFreeReport>,
 }
 
 /// The material of the timeline in the solver's terms.
@@ -324,9 +326,13 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     // groom that continues a bake (it has the solver's frames) keeps the
     // rest shape it carries.
     let continues = groom.attribute(attribute_names::FRAME_XYZ).is_some();
-    if timeline.file.solver.sag_free && !continues {
-        strands.make_sag_free(timeline.file.solver.gravity);
-    }
+    let parameters = parameters_of(timeline);
+    parameters.check()?;
+    let sag_free = if timeline.file.solver.sag_free && !continues {
+        Some(strands.make_sag_free_checked(&parameters)?)
+    } else {
+        None
+    };
     let mut colliders = ColliderSet::new();
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
@@ -338,8 +344,6 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
             *c.friction.get_ref(),
         ));
     }
-    let parameters = parameters_of(timeline);
-    parameters.check()?;
     check_preview_color(timeline, &groom)?;
     Ok(Prepared {
         groom,
@@ -348,6 +352,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         colliders,
         parameters,
         seed,
+        sag_free,
     })
 }
 
@@ -759,6 +764,7 @@ impl<'a> BakeRun<'a> {
             colliders,
             parameters,
             seed,
+            sag_free,
         } = prepare(timeline, options.seed)?;
         let export_warnings = export_warnings(timeline, options, &groom);
         if let (true, Some(first)) = (options.strict, export_warnings.first()) {
@@ -789,6 +795,9 @@ impl<'a> BakeRun<'a> {
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
+        if let Some(warning) = sag_free.as_ref().and_then(sim::SagFreeReport::warning) {
+            report.warnings.push(warning);
+        }
         // Strands the solver cannot move are said, not skipped silently.
         let unsimulated = sim::unsimulated_strands(&strands);
         if let Some(first) = unsimulated.first() {
