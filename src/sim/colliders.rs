@@ -222,6 +222,10 @@ pub(crate) struct Contact {
     pub position: V3,
     /// The outward normal of the (last) surface it was pushed out of.
     pub normal: Option<V3>,
+    /// That surface's velocity at the vertex (m/s) and its Coulomb
+    /// friction coefficient.
+    pub surface_velocity: V3,
+    pub friction: f32,
 }
 
 /// [`project`], also saying which surface the vertex touches (for a solve
@@ -234,6 +238,8 @@ pub(crate) fn project_contact(
     dt: f32,
 ) -> Contact {
     let mut normal = None;
+    let mut surface_velocity = [0.0; 3];
+    let mut friction = 0.0;
     for c in colliders {
         if p[0] < c.min[0]
             || p[1] < c.min[1]
@@ -275,14 +281,15 @@ pub(crate) fn project_contact(
         };
         let mut target = add(surface, scale(outward, radius));
         normal = Some(outward);
+        let arm = sub(p, c.center);
+        surface_velocity = add(
+            c.collider.linear_velocity,
+            cross(c.collider.angular_velocity, arm),
+        );
+        friction = c.collider.friction;
         if let Some(start) = start {
             let mu = c.collider.friction;
             if mu > 0.0 {
-                let arm = sub(p, c.center);
-                let surface_velocity = add(
-                    c.collider.linear_velocity,
-                    cross(c.collider.angular_velocity, arm),
-                );
                 let relative = sub(sub(target, start), scale(surface_velocity, dt));
                 let tangential = sub(relative, scale(outward, dot(relative, outward)));
                 let t = length(tangential);
@@ -297,6 +304,8 @@ pub(crate) fn project_contact(
     Contact {
         position: p,
         normal,
+        surface_velocity,
+        friction,
     }
 }
 

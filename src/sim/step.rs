@@ -153,6 +153,13 @@ struct Work {
     /// The physical model's contacts this step: each touching vertex's
     /// surface normal (zero: none).
     contact_normals: Vec<V3>,
+    /// Per touching vertex, the surface's velocity and friction
+    /// coefficient (Coulomb friction after the solve).
+    contact_velocities: Vec<V3>,
+    contact_friction: Vec<f32>,
+    /// The predicted positions before any contact (the physical model's
+    /// friction measures the normal push from them).
+    predicted: Vec<V3>,
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -169,10 +176,18 @@ impl Work {
             &mut self.dv,
             &mut self.omega,
             &mut self.contact_normals,
+            &mut self.contact_velocities,
+            &mut self.predicted,
         ] {
             v.resize(n, [0.0; 3]);
         }
-        for v in [&mut self.w, &mut self.w_q, &mut self.w_twist, &mut self.l] {
+        for v in [
+            &mut self.w,
+            &mut self.w_q,
+            &mut self.w_twist,
+            &mut self.l,
+            &mut self.contact_friction,
+        ] {
             v.resize(n, 0.0);
         }
         self.stretch.resize(n, StretchCoefficients::default());
@@ -564,7 +579,7 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     }
 
     if let Some(physical) = ctx.physical {
-        physical_constants(&physical, s, work);
+        physical_constants(&physical, dt, s, work);
     }
 
     // Bond-rate changes and (iii) the rest shape from the bonds (15).
@@ -596,13 +611,31 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     }
 }
 
+/// The frames' tilt inertia is at least that of a segment this speed
+/// times `dt` long (m/s), a numerical rotary inertia that vanishes as `dt`
+/// falls. A frame of a fine edge is so light (`m l^2 / 12`) that the
+/// Newton step, which has no geometric stiffness, turned it far past its
+/// edge when both ends of a near-straight strand were held (a perm rod
+/// holding the tip, the scalp the root): 5 mm edges of a 15 cm strand
+/// on a 1 cm rod blew up at the second step at dt 1/360 (edges 25,000 %
+/// long; at dt 1/1000, or with 1 cm edges, they held), and a strand pinned
+/// 0.1 um off its length did too. The blow-up needs the frame inertia ~5x
+/// (5 mm edges), ~10x (4 mm), ~30x (3 mm) at 1/360, growing as `dt^2`; a
+/// floor of 3 m/s failed at 3 mm edges, 4 m/s held 3-5 mm edges at 1/360
+/// and 1/120; 6 m/s keeps a margin. It changes no static shape (frames
+/// carry no load) and at dt 1/1000 (the frequency test) only edges under
+/// 6 mm get heavier frames: the 5 cm cantilever's first mode moves by
+/// `(k L)^2 / 24`, about 0.1 %.
+const FRAME_INERTIA_SPEED: f64 = 6.0;
+
 /// The physical model's inverse masses, inverse frame inertias and
 /// compliances (METHOD H) from the density, moduli, fibre radii and rest
 /// lengths. Vertices lump half of each adjacent edge's mass `rho A l`.
 /// Frames get the inertia of their segment about its centre: `m (l^2 / 12
 /// + r^2 / 4)` across the tangent (a rigid segment's, a choice the papers
 /// leave open) and the fibre's own `m r^2 / 2` about it (twist).
-fn physical_constants(physical: &Physical, s: &StrandMut<'_>, work: &mut Work) {
+fn physical_constants(physical: &Physical, dt: f32, s: &StrandMut<'_>, work: &mut Work) {
+    let dt = dt as f64;
     let n = s.positions.len();
     let m = n - 1;
     let pi = std::f64::consts::PI;
@@ -619,8 +652,10 @@ fn physical_constants(physical: &Physical, s: &StrandMut<'_>, work: &mut Work) {
         }
         mass[0] = 0.5 * segment;
         // Every frame is free: the first is clamped to the scalp by the
-        // root joint's bend/twist (see direct.rs).
-        work.w_q[e] = (1.0 / (segment * (l * l / 12.0 + r * r / 4.0))) as f32;
+        // root joint's bend/twist (see direct.rs). Its tilt inertia has a
+        // floor (see `FRAME_INERTIA_SPEED`).
+        let arm = l.max(FRAME_INERTIA_SPEED * dt);
+        work.w_q[e] = (1.0 / (segment * (arm * arm / 12.0 + r * r / 4.0))) as f32;
         work.w_twist[e] = (1.0 / (segment * r * r / 2.0)) as f32;
         // Stiffness falls with the cuticle from root to tip (13)-(14): the
         // edge takes the factor of its first joint.
@@ -796,20 +831,21 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
 impl Work {
     /// (iv) of the physical model: `iterations` Newton-XPBD iterations,
     /// each an exact solve of the strand's linearised compliant system.
-    /// Collisions (with their friction) come before each solve and the
-    /// solve keeps them: a touching vertex moves along the surface, and
-    /// hardly across it (`contact_normals` in direct.rs). Pinning vertices that static
+    /// Collisions come before each solve and the solve keeps them: a
+    /// touching vertex moves along the surface, and hardly across it
+    /// (`contact_normals` in direct.rs). Pinning vertices that static
     /// friction holds was tried: a strand pressed between its root and a
     /// held tip buckled into a zig-zag the Newton iterations could not
-    /// follow (edges 50 % long). A contact
-    /// found after the last solve gets one more solve, so the step never
-    /// ends on a projection that squeezes or stretches edges.
+    /// follow (edges 50 % long). Coulomb friction acts once, after the
+    /// last solve (`friction`). A contact or friction that moved a vertex
+    /// after the last solve gets one more solve, so the step never ends on
+    /// a projection that squeezes or stretches edges.
     fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
         let m = n - 1;
         let colliding = !ctx.colliders.is_empty();
         self.contact_normals[..n].fill([0.0; 3]);
         if colliding {
-            self.collide_contacts(ctx, n);
+            self.begin_contacts(ctx, n);
         }
         // Taken out so the solve can borrow the rest of the working copy.
         let mut direct = std::mem::take(&mut self.direct);
@@ -817,8 +853,9 @@ impl Work {
         for iteration in 0..ctx.iterations {
             direct.iterate();
             if colliding {
-                let moved = self.contacts_after_iteration(&mut direct, 0, ctx, n);
-                if moved && iteration + 1 == ctx.iterations {
+                let last = iteration + 1 == ctx.iterations;
+                let moved = self.contacts_after_iteration(&mut direct, 0, ctx, n, last);
+                if moved && last {
                     direct.iterate();
                 }
             }
@@ -827,18 +864,30 @@ impl Work {
         self.direct = direct;
     }
 
+    /// Before the solve: the prediction kept (friction measures from it),
+    /// the predicted positions projected.
+    fn begin_contacts(&mut self, ctx: &Context<'_>, n: usize) {
+        self.predicted[..n].copy_from_slice(&self.p[..n]);
+        self.collide_contacts(ctx, n);
+    }
+
     /// After a solve: lane `lane`'s positions projected out of the
-    /// colliders, its contacts recorded, both handed back to the solve.
-    /// Returns whether a vertex moved.
+    /// colliders, its contacts recorded, after the `last` solve Coulomb
+    /// friction applied, all handed back to the solve. Returns whether a
+    /// vertex moved.
     fn contacts_after_iteration<T: Real>(
         &mut self,
         direct: &mut Direct<T>,
         lane: usize,
         ctx: &Context<'_>,
         n: usize,
+        last: bool,
     ) -> bool {
         direct.positions_f32(lane, &mut self.p[..n]);
-        let moved = self.collide_contacts(ctx, n);
+        let mut moved = self.collide_contacts(ctx, n);
+        if last {
+            moved |= self.friction(ctx, n);
+        }
         direct.set_positions(lane, &self.p[..n]);
         direct.set_contact_normals(lane, &self.contact_normals[..n]);
         moved
@@ -854,18 +903,52 @@ impl Work {
             if self.w[i] <= 0.0 {
                 continue;
             }
-            let contact = project_contact(
-                ctx.colliders,
-                self.p[i],
-                Some(self.x[i]),
-                ctx.radius,
-                ctx.dt,
-            );
+            // No friction here: it acts once, after the solve (`friction`).
+            let contact = project_contact(ctx.colliders, self.p[i], None, ctx.radius, ctx.dt);
             moved |= math::length(math::sub(contact.position, self.p[i])) > 0.01 * ctx.radius;
             self.p[i] = contact.position;
             if let Some(normal) = contact.normal {
                 self.contact_normals[i] = normal;
+                self.contact_velocities[i] = contact.surface_velocity;
+                self.contact_friction[i] = contact.friction;
             }
+        }
+        moved
+    }
+
+    /// Coulomb friction of the step at each touching vertex (position-level,
+    /// as XPBD does it): the step's motion along the surface, relative to
+    /// the surface, is held back by `mu` times the distance the contact
+    /// pushed the vertex out along the normal (from its prediction, which
+    /// gravity and inertia carried into the surface): all of it while it is
+    /// smaller (static), else by that much (kinetic). A strand on a slope
+    /// of angle `a` so stays put for `mu > tan a` and otherwise slides at
+    /// `g (sin a - mu cos a)`. Applied once the solve has moved the strand,
+    /// so the solve cannot undo it (applied before it, a resting strand
+    /// slid on); per vertex, so in no order. Returns whether a vertex moved.
+    fn friction(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let mut moved = false;
+        for i in 1..n {
+            let normal = self.contact_normals[i];
+            let mu = self.contact_friction[i];
+            if self.w[i] <= 0.0 || normal == [0.0; 3] || mu <= 0.0 {
+                continue;
+            }
+            let pushed = math::dot(math::sub(self.p[i], self.predicted[i]), normal).max(0.0);
+            let surface_motion = math::scale(self.contact_velocities[i], ctx.dt);
+            let relative = math::sub(math::sub(self.p[i], self.x[i]), surface_motion);
+            let tangential = math::sub(relative, math::scale(normal, math::dot(relative, normal)));
+            let slide = math::length(tangential);
+            if slide == 0.0 {
+                continue;
+            }
+            let held = if slide <= mu * pushed {
+                1.0
+            } else {
+                mu * pushed / slide
+            };
+            self.p[i] = math::sub(self.p[i], math::scale(tangential, held));
+            moved |= held * slide > 0.01 * ctx.radius;
         }
         moved
     }
@@ -906,7 +989,7 @@ fn step_group_direct(
         prepare(ctx, s, work);
         work.contact_normals[..n].fill([0.0; 3]);
         if colliding {
-            work.collide_contacts(ctx, n);
+            work.begin_contacts(ctx, n);
         }
     }
     let direct = &mut group.direct;
@@ -921,7 +1004,7 @@ fn step_group_direct(
             let last = iteration + 1 == ctx.iterations;
             let mut again = false;
             for (lane, work) in works.iter_mut().enumerate() {
-                let moved = work.contacts_after_iteration(direct, lane, ctx, n);
+                let moved = work.contacts_after_iteration(direct, lane, ctx, n, last);
                 if last {
                     direct.set_active(lane, moved);
                     again |= moved;

@@ -199,8 +199,21 @@ fn turns_count_a_helix_and_not_a_zig_zag() {
     assert!(turns(&zig) < 0.05, "{}", turns(&zig));
 }
 
+/// Also the regression of fine edges on a small rod at dt 1/360: the
+/// sample's 5 mm edges on 1 cm rods blew up at that step (the solve turned
+/// their light frames far past their edges; src/sim/step.rs
+/// `FRAME_INERTIA_SPEED`), so the sample ran at 1/1000.
 #[test]
 fn perm_strands_are_coils_after_release_under_gravity() {
+    let text = std::fs::read_to_string(sample("perm.toml")).unwrap();
+    assert!(
+        text.contains("dt = \"1/360\""),
+        "perm.toml runs at dt 1/360"
+    );
+    assert!(
+        text.contains("segment_length = 0.005"),
+        "perm.toml's 5 mm edges"
+    );
     // On the rod: the same timeline with the set phase running to the end
     // of the perm stage (the rods never unroll) and no release.
     let wound = bake_final(&variant("perm.toml", 4, |t| {
@@ -224,6 +237,18 @@ fn perm_strands_are_coils_after_release_under_gravity() {
     assert!(on_rod > 1.5, "the rod made {on_rod} turns");
     assert!(after >= 0.5 * on_rod, "kept {after} of {on_rod} turns");
     assert!(longest_edge <= 0.01, "{longest_edge}");
+    // Every edge of the wound and the released strands within 1 % of its
+    // 5 mm rest length.
+    let strain = [&wound, &released]
+        .iter()
+        .flat_map(|g| g.strands())
+        .flat_map(|s| {
+            s.windows(2)
+                .map(|w| (distance(w[0], w[1]) / 0.005 - 1.0).abs())
+        })
+        .fold(0.0f64, f64::max);
+    eprintln!("perm: max |edge/rest - 1| {:.3} %", strain * 100.0);
+    assert!(strain <= 0.01, "edges strained {:.2} %", strain * 100.0);
 }
 
 /// The full head (guides only, fewer of them: without hair-hair the guides
