@@ -222,6 +222,8 @@ impl<T: Real> Direct<T> {
         self.root = build(|c| gather(strands, |s| s.root_frame[c] as f64));
         self.lambda.clear();
         self.lambda.resize(m, [T::splat(0.0); 6]);
+        // Once per strand, not per constant (the same value).
+        let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
         self.constants.clear();
         self.constants.extend((0..m).map(|k| {
             // Frame k - 1's inertia where it is free.
@@ -232,7 +234,6 @@ impl<T: Real> Direct<T> {
                     0.0
                 }
             };
-            let inv_dt2 = |s: &DirectInput<'_>| 1.0 / (s.dt as f64 * s.dt as f64);
             Constants {
                 l: gather(strands, |s| s.l[k] as f64),
                 w_pair: gather(strands, |s| s.w[k] as f64 + s.w[k + 1] as f64),
@@ -241,12 +242,12 @@ impl<T: Real> Direct<T> {
                 dw: gather(strands, |s| s.w_twist[k] as f64 - s.w_q[k] as f64),
                 wq_before: gather(strands, |s| before(s, s.w_q)),
                 dw_before: gather(strands, |s| before(s, s.w_twist) - before(s, s.w_q)),
-                a_sh: gather(strands, |s| s.compliance[k].shear * inv_dt2(s)),
-                a_st: gather(strands, |s| s.compliance[k].stretch * inv_dt2(s)),
-                a_b: gather(strands, |s| s.compliance[k].bend * inv_dt2(s)),
-                a_t: gather(strands, |s| s.compliance[k].twist * inv_dt2(s)),
-                a_b_next: gather(strands, |s| s.compliance[k].bend_next * inv_dt2(s)),
-                a_t_next: gather(strands, |s| s.compliance[k].twist_next * inv_dt2(s)),
+                a_sh: gather::<T>(strands, |s| s.compliance[k].shear) * inv_dt2,
+                a_st: gather::<T>(strands, |s| s.compliance[k].stretch) * inv_dt2,
+                a_b: gather::<T>(strands, |s| s.compliance[k].bend) * inv_dt2,
+                a_t: gather::<T>(strands, |s| s.compliance[k].twist) * inv_dt2,
+                a_b_next: gather::<T>(strands, |s| s.compliance[k].bend_next) * inv_dt2,
+                a_t_next: gather::<T>(strands, |s| s.compliance[k].twist_next) * inv_dt2,
                 rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
                 rest_w: gather(strands, |s| {
                     let r = s.rest[k].map(|v| v as f64);

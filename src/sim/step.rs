@@ -557,7 +557,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                     q[3] + h * spin[3],
                 ])
             };
-            work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+            if ctx.physical.is_none() {
+                // (The physical model's inertias come from its constants.)
+                work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+            }
         }
         if ctx.physical.is_none() {
             work.stretch[e] =
