@@ -26,7 +26,7 @@
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::lanes::{F64x4, Real};
+use super::lanes::Real;
 use super::math::{Quat, V3};
 
 /// The largest frame rotation one iteration applies, radians: a trust
@@ -172,6 +172,10 @@ pub struct Direct<T> {
     w: Vec<T>,
     /// Per vertex, its contact normal (zero: none).
     contact: Vec<D3<T>>,
+    /// Whether any lane has a contact: without one the solve takes the
+    /// contact-free path, which skips the contact terms (exact zeros there)
+    /// and the coupling that only a contact fills, with the same bits.
+    touching: bool,
     /// Per lane, 1 where an iteration may move the strand, 0 where it must
     /// leave it as it is ([`Direct::set_active`]).
     active: T,
@@ -207,6 +211,7 @@ impl<T: Real> Direct<T> {
                 })
             })
         }));
+        self.touching = touches(&self.contact);
         self.active = T::splat(1.0);
         self.p.clear();
         self.p
@@ -217,6 +222,8 @@ impl<T: Real> Direct<T> {
         self.root = build(|c| gather(strands, |s| s.root_frame[c] as f64));
         self.lambda.clear();
         self.lambda.resize(m, [T::splat(0.0); 6]);
+        // Once per strand, not per constant (the same value).
+        let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
         self.constants.clear();
         self.constants.extend((0..m).map(|k| {
             // Frame k - 1's inertia where it is free.
@@ -227,7 +234,6 @@ impl<T: Real> Direct<T> {
                     0.0
                 }
             };
-            let inv_dt2 = |s: &DirectInput<'_>| 1.0 / (s.dt as f64 * s.dt as f64);
             Constants {
                 l: gather(strands, |s| s.l[k] as f64),
                 w_pair: gather(strands, |s| s.w[k] as f64 + s.w[k + 1] as f64),
@@ -236,12 +242,12 @@ impl<T: Real> Direct<T> {
                 dw: gather(strands, |s| s.w_twist[k] as f64 - s.w_q[k] as f64),
                 wq_before: gather(strands, |s| before(s, s.w_q)),
                 dw_before: gather(strands, |s| before(s, s.w_twist) - before(s, s.w_q)),
-                a_sh: gather(strands, |s| s.compliance[k].shear * inv_dt2(s)),
-                a_st: gather(strands, |s| s.compliance[k].stretch * inv_dt2(s)),
-                a_b: gather(strands, |s| s.compliance[k].bend * inv_dt2(s)),
-                a_t: gather(strands, |s| s.compliance[k].twist * inv_dt2(s)),
-                a_b_next: gather(strands, |s| s.compliance[k].bend_next * inv_dt2(s)),
-                a_t_next: gather(strands, |s| s.compliance[k].twist_next * inv_dt2(s)),
+                a_sh: gather::<T>(strands, |s| s.compliance[k].shear) * inv_dt2,
+                a_st: gather::<T>(strands, |s| s.compliance[k].stretch) * inv_dt2,
+                a_b: gather::<T>(strands, |s| s.compliance[k].bend) * inv_dt2,
+                a_t: gather::<T>(strands, |s| s.compliance[k].twist) * inv_dt2,
+                a_b_next: gather::<T>(strands, |s| s.compliance[k].bend_next) * inv_dt2,
+                a_t_next: gather::<T>(strands, |s| s.compliance[k].twist_next) * inv_dt2,
                 rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
                 rest_w: gather(strands, |s| {
                     let r = s.rest[k].map(|v| v as f64);
@@ -271,6 +277,7 @@ impl<T: Real> Direct<T> {
     /// iterations (zero: none).
     pub fn set_contact_normals(&mut self, lane: usize, normals: &[V3]) {
         set_lane(&mut self.contact, lane, normals);
+        self.touching = touches(&self.contact);
     }
 
     /// Whether the next iterations move lane `lane`'s strand (a strand
@@ -298,8 +305,19 @@ impl<T: Real> Direct<T> {
     /// exactly, apply `dx = W J^T dlambda`.
     #[inline(always)]
     pub fn iterate(&mut self) {
-        self.forward();
-        if let Some(solved) = self.backward() {
+        if self.touching {
+            self.iterate_with::<true>();
+        } else {
+            self.iterate_with::<false>();
+        }
+    }
+
+    /// `iterate`, with the contact terms (`CONTACT`) or without (no lane
+    /// touches: the terms are exact zeros and skipping them keeps the bits).
+    #[inline(always)]
+    fn iterate_with<const CONTACT: bool>(&mut self) {
+        self.forward::<CONTACT>();
+        if let Some(solved) = self.backward::<CONTACT>() {
             let solved = T::gt_select(self.active, T::splat(0.0), solved, T::splat(0.0));
             if (0..T::WIDTH).all(|i| solved.lane(i) > 0.0) {
                 // The usual case: every lane moves (the same values as
@@ -318,19 +336,25 @@ impl<T: Real> Direct<T> {
     /// = b_k - Z_{k-1}^T D_{k-1}^-1 L_{k-1}^-1 b'_{k-1}`, `Z_k = L_k^-1
     /// U_k`.
     #[inline(always)]
-    fn forward(&mut self) {
+    fn forward<const CONTACT: bool>(&mut self) {
         let m = self.q.len();
+        // Every entry of the lower triangle and of `b` is written for each
+        // block (the blocks are built in place: as returned values the
+        // eight-wide ones were copied through memcpy).
+        let zero = T::splat(0.0);
+        let mut d = [[zero; 6]; 6];
+        let mut b = [zero; 6];
         for k in 0..m {
-            let c = self.constants[k];
+            let c = &self.constants[k];
             let q = self.q[k];
             let d3 = tangent(q);
             let before = if k >= 1 { self.q[k - 1] } else { self.root };
             let bend = bend_linearisation(before, q, c.rest, c.rest_w);
             let g = bend.g;
             let g_d3 = mul_av(&g, d3);
-            let (mut d, mut b) = self.diagonal_block(k, &c, d3, &bend, g_d3);
+            self.diagonal_block::<CONTACT>(k, c, d3, &bend, g_d3, &mut d, &mut b);
             if k >= 1 {
-                self.eliminate_previous(k, &g, bend.g_before, &mut d, &mut b);
+                self.eliminate_previous::<CONTACT>(k, &g, bend.g_before, &mut d, &mut b);
             }
             let f = &mut self.factors[k];
             f.d3 = d3;
@@ -343,16 +367,18 @@ impl<T: Real> Direct<T> {
 
     /// Block `k`'s diagonal block (lower triangle) and right-hand side.
     #[inline(always)]
-    fn diagonal_block(
+    #[allow(clippy::too_many_arguments)]
+    fn diagonal_block<const CONTACT: bool>(
         &self,
         k: usize,
         c: &Constants<T>,
         d3: D3<T>,
         bend: &Bend<T>,
         g_d3: D3<T>,
-    ) -> ([D6<T>; 6], D6<T>) {
+        d: &mut [D6<T>; 6],
+        b: &mut D6<T>,
+    ) {
         let zero = T::splat(0.0);
-        let mut d = [[zero; 6]; 6];
         // Bend/bend: G (W_k + W_{k-1}) G^T with W = w_q I + (w_twist -
         // w_q) d3 d3^T, G G^T = A A^T (R1 is a rotation).
         let wq_sum = c.wq + c.wq_before;
@@ -389,18 +415,19 @@ impl<T: Real> Direct<T> {
         }
         // Contacts: the vertices' inverse masses lose CONTACT_LOCK of
         // their part along the normals.
-        let lock = T::splat(CONTACT_LOCK);
-        let (lw0, lw1) = (lock * self.w[k], lock * self.w[k + 1]);
-        let (n0, n1) = (self.contact[k], self.contact[k + 1]);
-        for r in 0..3 {
-            for col in 0..=r {
-                d[3 + r][3 + col] =
-                    d[3 + r][3 + col] - (lw0 * n0[r] * n0[col] + lw1 * n1[r] * n1[col]);
+        if CONTACT {
+            let lock = T::splat(CONTACT_LOCK);
+            let (lw0, lw1) = (lock * self.w[k], lock * self.w[k + 1]);
+            let (n0, n1) = (self.contact[k], self.contact[k + 1]);
+            for r in 0..3 {
+                for col in 0..=r {
+                    d[3 + r][3 + col] =
+                        d[3 + r][3 + col] - (lw0 * n0[r] * n0[col] + lw1 * n1[r] * n1[col]);
+                }
             }
         }
         // Right-hand side -(C + alpha~ lambda).
         let lam = self.lambda[k];
-        let mut b = [zero; 6];
         let alpha_b = [c.a_b, c.a_b, c.a_t];
         // The flexibility is tridiagonal over the joints: alpha~ lambda
         // takes the neighbours' multipliers too.
@@ -431,13 +458,12 @@ impl<T: Real> Direct<T> {
             let al = c.a_sh * lam[3 + r] + a_diff * d3[r] * along;
             b[3 + r] = -(cs + al);
         }
-        (d, b)
     }
 
     /// The coupling `U` of block `k - 1` to block `k`, `Z = L^-1 U` with
     /// block `k - 1`'s factor, and its elimination from block `k`.
     #[inline(always)]
-    fn eliminate_previous(
+    fn eliminate_previous<const CONTACT: bool>(
         &mut self,
         k: usize,
         g: &M3<T>,
@@ -446,7 +472,7 @@ impl<T: Real> Direct<T> {
         b: &mut D6<T>,
     ) {
         let zero = T::splat(0.0);
-        let cp = self.constants[k - 1];
+        let cp = &self.constants[k - 1];
         let fp = &mut self.factors[k - 1];
         // Bend k-1 / bend k through frame k-1: -G_{k-1} W_{k-1} G_k^T.
         let mut au = [[zero; 3]; 3];
@@ -498,21 +524,35 @@ impl<T: Real> Direct<T> {
             // -M_k = -w_k (I - CONTACT_LOCK n n^T): diagonal without a
             // contact (then Z's bottom right stays lower triangular), full
             // with one.
-            for i in 0..3 {
-                let mut s = lock_w * nk[i] * nk[col];
+            // Without a contact the part above the diagonal is exactly
+            // zero (left so), and so are the terms of the part below that
+            // read it: skipped.
+            let first = if CONTACT { 0 } else { col };
+            for i in first..3 {
+                let mut s = if CONTACT {
+                    lock_w * nk[i] * nk[col]
+                } else {
+                    zero
+                };
                 if i == col {
                     s = s - cp.w_next;
                 }
-                for j in 0..i {
+                for j in first..i {
                     s = s - l[(3 + i, 3 + j)] * z_br[j][col];
                 }
                 z_br[i][col] = s;
             }
         }
-        // D^-1 Z.
-        let scale =
-            |z: &M3<T>, first: usize| build::<D3<T>, 3>(|r| build(|c| z[r][c] * inv[first + r]));
-        let (s_tl, s_bl, s_br) = (scale(&z_tl, 0), scale(&z_bl, 3), scale(&z_br, 3));
+        // D^-1 Z, kept in the factor (written in place: a copy of the
+        // eight-wide matrices went through memcpy).
+        for r in 0..3 {
+            for c in 0..3 {
+                fp.z_tl[r][c] = z_tl[r][c] * inv[r];
+                fp.z_bl[r][c] = z_bl[r][c] * inv[3 + r];
+                fp.z_br[r][c] = z_br[r][c] * inv[3 + r];
+            }
+        }
+        let (s_tl, s_bl, s_br) = (&fp.z_tl, &fp.z_bl, &fp.z_br);
         // D -= Z^T D^-1 Z (lower triangle), b -= Z^T (D^-1 L^-1 b').
         for i in 0..3 {
             for j in 0..=i {
@@ -525,16 +565,20 @@ impl<T: Real> Direct<T> {
                 }
                 d[i][j] = d[i][j] - s;
             }
+            // Z's bottom right is lower triangular without a contact: the
+            // terms of its zeros (exact zeros, the sum starts at +0) are
+            // skipped.
+            let below = if CONTACT { 0 } else { i };
             for j in 0..3 {
                 let mut s = zero;
-                for r in 0..3 {
+                for r in below..3 {
                     s = s + z_br[r][i] * s_bl[r][j];
                 }
                 d[3 + i][j] = d[3 + i][j] - s;
             }
             for j in 0..=i {
                 let mut s = zero;
-                for r in 0..3 {
+                for r in below..3 {
                     s = s + z_br[r][i] * s_br[r][j];
                 }
                 d[3 + i][3 + j] = d[3 + i][3 + j] - s;
@@ -551,14 +595,11 @@ impl<T: Real> Direct<T> {
             }
             b[i] = b[i] - s;
             let mut s = zero;
-            for r in 0..3 {
+            for r in (if CONTACT { 0 } else { i })..3 {
                 s = s + z_br[r][i] * t[3 + r];
             }
             b[3 + i] = b[3 + i] - s;
         }
-        fp.z_tl = s_tl;
-        fp.z_bl = s_bl;
-        fp.z_br = s_br;
     }
 
     /// Back substitution `x_k = L^-T (D^-1 L^-1 b'_k - D^-1 Z_k x_{k+1})`
@@ -567,7 +608,7 @@ impl<T: Real> Direct<T> {
     /// non-finite input; such a lane is left as it is for the quarantine to
     /// judge), or `None` when no lane is finite.
     #[inline(always)]
-    fn backward(&mut self) -> Option<T> {
+    fn backward<const CONTACT: bool>(&mut self) -> Option<T> {
         let m = self.q.len();
         let zero = T::splat(0.0);
         let mut probe = zero;
@@ -586,20 +627,16 @@ impl<T: Real> Direct<T> {
                     for j in 0..3 {
                         s = s + f.z_bl[r][j] * next[j];
                     }
-                    for j in 0..3 {
+                    // Without a contact Z's bottom right is lower
+                    // triangular (trailing exact zeros skipped).
+                    let last = if CONTACT { 2 } else { r };
+                    for j in 0..=last {
                         s = s + f.z_br[r][j] * next[3 + j];
                     }
                     y[3 + r] = y[3 + r] - s;
                 }
             }
-            let mut x = [zero; 6];
-            for i in (0..6).rev() {
-                let mut s = y[i];
-                for j in i + 1..6 {
-                    s = s - f.unit[(j, i)] * x[j];
-                }
-                x[i] = s;
-            }
+            let x = backward_substitute(&f.unit, y);
             // x * 0 is 0 for finite x, NaN otherwise.
             for v in x {
                 probe = probe + v * zero;
@@ -685,15 +722,23 @@ impl<T: Real> Direct<T> {
     }
 }
 
-impl Direct<F64x4> {
-    /// `iterate` on four strands, with AVX2 where the CPU has it (the
-    /// same operations in wider registers; no FMA).
+impl<T: Real> Direct<T> {
+    /// `iterate` with the widest instructions the CPU has for the lanes
+    /// (AVX-512 for eight, AVX2 for four; the same operations in wider
+    /// registers, no FMA, so the same bits).
     pub fn iterate_lanes(&mut self) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            unsafe { self.iterate_avx2() };
-            return;
+        {
+            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { self.iterate_avx512() };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { self.iterate_avx2() };
+                return;
+            }
         }
         self.iterate();
     }
@@ -703,6 +748,19 @@ impl Direct<F64x4> {
     fn iterate_avx2(&mut self) {
         self.iterate();
     }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn iterate_avx512(&mut self) {
+        self.iterate();
+    }
+}
+
+/// Whether any lane of any vertex has a contact normal.
+fn touches<T: Real>(normals: &[D3<T>]) -> bool {
+    normals
+        .iter()
+        .any(|n| n.iter().any(|c| (0..T::WIDTH).any(|i| c.lane(i) != 0.0)))
 }
 
 /// Replaces lane `lane` of every vector in `to` with `from`'s (f32 in),
@@ -770,45 +828,93 @@ fn bend_linearisation<T: Real>(q1: [T; 4], q2: [T; 4], rest: D3<T>, rest_w: T) -
     }
 }
 
+// The triangular loops below are written out row by row (by macros with
+// literal bounds) so the compiler unrolls them fully: as nested loops with
+// bounds depending on the outer index they stayed loops with index
+// arithmetic and bounds checks on the solve's critical path. The operations
+// and their order are those of the loops.
+
+/// Row `i` of the `L D L^T` factor: `L D` and `L` below the diagonal (over
+/// columns `j`), then the pivot.
+macro_rules! ldlt_row {
+    ($a:ident, $l:ident, $inv:ident, $ld:ident, $i:literal; $($j:literal)*) => {
+        $(
+            let mut s = $a[$i][$j];
+            for k in 0..$j {
+                s = s - $ld[k] * $l[($j, k)];
+            }
+            $ld[$j] = s;
+            $l[($i, $j)] = s * $inv[$j];
+        )*
+        let mut s = $a[$i][$i];
+        for k in 0..$i {
+            s = s - $ld[k] * $l[($i, k)];
+        }
+        let (zero, one) = (T::splat(0.0), T::splat(1.0));
+        $inv[$i] = one / T::gt_select(s, zero, s, one);
+    };
+}
+
 /// `L D L^T` factor of a symmetric positive definite 6x6 block given by
 /// its lower triangle: `L` unit lower (below the diagonal) and `D^-1`. A
 /// non-positive pivot (only from non-finite input) becomes 1 so the
 /// quarantine sees the NaN rather than a panic.
 #[inline(always)]
+// Row 0 (and column 0) have no terms: empty ranges from the macro.
+#[allow(clippy::reversed_empty_ranges)]
 fn ldlt<T: Real>(a: &[D6<T>; 6], l: &mut Unit<T>, inv: &mut D6<T>) {
-    let zero = T::splat(0.0);
-    let one = T::splat(1.0);
     // Row i of L D, below the diagonal.
-    let mut ld = [zero; 6];
-    for i in 0..6 {
-        for j in 0..i {
-            let mut s = a[i][j];
-            for k in 0..j {
-                s = s - ld[k] * l[(j, k)];
-            }
-            ld[j] = s;
-            l[(i, j)] = s * inv[j];
+    let mut ld = [T::splat(0.0); 6];
+    ldlt_row!(a, l, inv, ld, 0;);
+    ldlt_row!(a, l, inv, ld, 1; 0);
+    ldlt_row!(a, l, inv, ld, 2; 0 1);
+    ldlt_row!(a, l, inv, ld, 3; 0 1 2);
+    ldlt_row!(a, l, inv, ld, 4; 0 1 2 3);
+    ldlt_row!(a, l, inv, ld, 5; 0 1 2 3 4);
+}
+
+/// `y_i = b_i - sum_{k < i} L_ik y_k`.
+macro_rules! forward_row {
+    ($l:ident, $y:ident, $i:literal) => {
+        for k in 0..$i {
+            $y[$i] = $y[$i] - $l[($i, k)] * $y[k];
         }
-        let mut s = a[i][i];
-        for k in 0..i {
-            s = s - ld[k] * l[(i, k)];
-        }
-        inv[i] = one / T::gt_select(s, zero, s, one);
-    }
+    };
 }
 
 /// `D^-1 L^-1 b`.
 #[inline(always)]
 fn forward_substitute<T: Real>(l: &Unit<T>, inv: &D6<T>, b: D6<T>) -> D6<T> {
     let mut y = b;
-    for i in 0..6 {
-        let mut s = b[i];
-        for k in 0..i {
-            s = s - l[(i, k)] * y[k];
-        }
-        y[i] = s;
-    }
+    forward_row!(l, y, 1);
+    forward_row!(l, y, 2);
+    forward_row!(l, y, 3);
+    forward_row!(l, y, 4);
+    forward_row!(l, y, 5);
     build(|i| y[i] * inv[i])
+}
+
+/// `x_i = y_i - sum_{j > i} L_ji x_j`.
+macro_rules! backward_row {
+    ($l:expr, $y:ident, $x:ident, $i:literal) => {
+        let mut s = $y[$i];
+        for j in $i + 1..6 {
+            s = s - $l[(j, $i)] * $x[j];
+        }
+        $x[$i] = s;
+    };
+}
+
+/// `L^-T y`.
+#[inline(always)]
+fn backward_substitute<T: Real>(l: &Unit<T>, y: D6<T>) -> D6<T> {
+    let mut x = y;
+    backward_row!(l, y, x, 4);
+    backward_row!(l, y, x, 3);
+    backward_row!(l, y, x, 2);
+    backward_row!(l, y, x, 1);
+    backward_row!(l, y, x, 0);
+    x
 }
 
 #[inline(always)]

@@ -460,99 +460,123 @@ impl Real for f64 {
     }
 }
 
-/// Four `f64` lanes of the physical model's solve. Plain arrays rather
-/// than `wide::f64x4`: wide picks its instructions when the crate is
-/// compiled (SSE2 in the portable x86-64 build), while these element-wise
-/// operations also compile to AVX inside the solve's copy built with
-/// `#[target_feature(enable = "avx2")]` and chosen at run time
-/// (`Direct::iterate_lanes`). Either way each lane does the IEEE operation
-/// of the scalar code (no FMA), so the results are the same bits.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[repr(align(32))]
-pub struct F64x4(pub [f64; LANES]);
+/// `f64` lanes of the physical model's solve. Plain arrays rather than
+/// `wide::f64x4`: wide picks its instructions when the crate is compiled
+/// (SSE2 in the portable x86-64 build), while these element-wise operations
+/// also compile to AVX2 or AVX-512 inside the solve's copies built with
+/// `#[target_feature]` and chosen at run time (`Direct::iterate_lanes`).
+/// Either way each lane does the IEEE operation of the scalar code (no
+/// FMA), so the results are the same bits at any width. Written out per
+/// lane (not with `array::map`, which was not inlined in the hot loop).
+macro_rules! f64_lanes {
+    ($(#[$doc:meta])* $name:ident, $width:literal, $align:literal, [$($i:literal)*]) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        #[repr(align($align))]
+        pub struct $name(pub [f64; $width]);
 
-impl F64x4 {
-    #[inline(always)]
-    fn zip(self, o: F64x4, f: impl Fn(f64, f64) -> f64) -> F64x4 {
-        let (a, b) = (self.0, o.0);
-        F64x4([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
-    }
-    #[inline(always)]
-    fn each(self, f: impl Fn(f64) -> f64) -> F64x4 {
-        let a = self.0;
-        F64x4([f(a[0]), f(a[1]), f(a[2]), f(a[3])])
-    }
-    #[inline(always)]
-    fn select(a: F64x4, b: F64x4, x: F64x4, y: F64x4, test: impl Fn(f64, f64) -> bool) -> F64x4 {
-        let pick = |i: usize| if test(a.0[i], b.0[i]) { x.0[i] } else { y.0[i] };
-        F64x4([pick(0), pick(1), pick(2), pick(3)])
-    }
+        impl $name {
+            #[inline(always)]
+            fn zip(self, o: $name, f: impl Fn(f64, f64) -> f64) -> $name {
+                let (a, b) = (self.0, o.0);
+                $name([$(f(a[$i], b[$i])),*])
+            }
+            #[inline(always)]
+            fn each(self, f: impl Fn(f64) -> f64) -> $name {
+                let a = self.0;
+                $name([$(f(a[$i])),*])
+            }
+            #[inline(always)]
+            fn select(
+                a: $name,
+                b: $name,
+                x: $name,
+                y: $name,
+                test: impl Fn(f64, f64) -> bool,
+            ) -> $name {
+                let pick = |i: usize| if test(a.0[i], b.0[i]) { x.0[i] } else { y.0[i] };
+                $name([$(pick($i)),*])
+            }
+        }
+
+        impl Add for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn add(self, o: $name) -> $name {
+                self.zip(o, |a, b| a + b)
+            }
+        }
+        impl Sub for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn sub(self, o: $name) -> $name {
+                self.zip(o, |a, b| a - b)
+            }
+        }
+        impl Mul for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn mul(self, o: $name) -> $name {
+                self.zip(o, |a, b| a * b)
+            }
+        }
+        impl std::ops::Div for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn div(self, o: $name) -> $name {
+                self.zip(o, |a, b| a / b)
+            }
+        }
+        impl Neg for $name {
+            type Output = $name;
+            #[inline(always)]
+            fn neg(self) -> $name {
+                self.each(|a| -a)
+            }
+        }
+
+        impl Real for $name {
+            const WIDTH: usize = $width;
+            #[inline(always)]
+            fn splat(v: f64) -> Self {
+                $name([v; $width])
+            }
+            #[inline(always)]
+            fn gather(mut f: impl FnMut(usize) -> f64) -> Self {
+                $name([$(f($i)),*])
+            }
+            #[inline(always)]
+            fn lane(self, i: usize) -> f64 {
+                self.0[i]
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                self.each(f64::sqrt)
+            }
+            #[inline(always)]
+            fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+                $name::select(a, b, x, y, |a, b| a > b)
+            }
+            #[inline(always)]
+            fn lt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+                $name::select(a, b, x, y, |a, b| a < b)
+            }
+            #[inline(always)]
+            fn eq_select(a: Self, b: Self, x: Self, y: Self) -> Self {
+                $name::select(a, b, x, y, |a, b| a == b)
+            }
+        }
+    };
 }
 
-impl Add for F64x4 {
-    type Output = F64x4;
-    #[inline(always)]
-    fn add(self, o: F64x4) -> F64x4 {
-        self.zip(o, |a, b| a + b)
-    }
-}
-impl Sub for F64x4 {
-    type Output = F64x4;
-    #[inline(always)]
-    fn sub(self, o: F64x4) -> F64x4 {
-        self.zip(o, |a, b| a - b)
-    }
-}
-impl Mul for F64x4 {
-    type Output = F64x4;
-    #[inline(always)]
-    fn mul(self, o: F64x4) -> F64x4 {
-        self.zip(o, |a, b| a * b)
-    }
-}
-impl std::ops::Div for F64x4 {
-    type Output = F64x4;
-    #[inline(always)]
-    fn div(self, o: F64x4) -> F64x4 {
-        self.zip(o, |a, b| a / b)
-    }
-}
-impl Neg for F64x4 {
-    type Output = F64x4;
-    #[inline(always)]
-    fn neg(self) -> F64x4 {
-        self.each(|a| -a)
-    }
-}
+f64_lanes!(
+    /// Four `f64` lanes (AVX2: one register).
+    F64x4, 4, 32, [0 1 2 3]
+);
+f64_lanes!(
+    /// Eight `f64` lanes (AVX-512: one register), for eight strands.
+    F64x8, 8, 64, [0 1 2 3 4 5 6 7]
+);
 
-impl Real for F64x4 {
-    const WIDTH: usize = LANES;
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        F64x4([v; LANES])
-    }
-    #[inline(always)]
-    fn gather(mut f: impl FnMut(usize) -> f64) -> Self {
-        F64x4([f(0), f(1), f(2), f(3)])
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f64 {
-        self.0[i]
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        self.each(f64::sqrt)
-    }
-    #[inline(always)]
-    fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
-        F64x4::select(a, b, x, y, |a, b| a > b)
-    }
-    #[inline(always)]
-    fn lt_select(a: Self, b: Self, x: Self, y: Self) -> Self {
-        F64x4::select(a, b, x, y, |a, b| a < b)
-    }
-    #[inline(always)]
-    fn eq_select(a: Self, b: Self, x: Self, y: Self) -> Self {
-        F64x4::select(a, b, x, y, |a, b| a == b)
-    }
-}
+/// Strands per group of the physical model's wide solve.
+pub const WIDE: usize = 8;

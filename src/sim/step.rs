@@ -12,7 +12,7 @@ use super::constraints::{
 };
 use super::direct::{Direct, DirectInput, EdgeCompliance};
 use super::forces::{blower_dv, EdgeGrid};
-use super::lanes::{Group, LaneInput, Real, LANES};
+use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
 use super::sag_free::segment_mass;
@@ -65,8 +65,10 @@ impl std::fmt::Debug for Dispatch {
 /// One block's scratch.
 #[derive(Default)]
 struct Block {
-    works: [Work; LANES],
+    works: [Work; WIDE],
     group: Group,
+    /// The physical model's solve of eight strands (AVX-512).
+    wide: Direct<F64x8>,
     /// The block's strands that failed this step (capacity for all of them).
     failed: Vec<usize>,
 }
@@ -119,6 +121,9 @@ struct Context<'a> {
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
     simd: bool,
+    /// The physical model's strands go eight to a group (the CPU has
+    /// AVX-512; otherwise four).
+    wide: bool,
     physical: Option<Physical>,
 }
 
@@ -353,6 +358,7 @@ impl Solver {
             colliders: &prepared,
             root_transform: strands.root_transform,
             simd: *simd,
+            wide: *simd && strands.material.model == Model::Physical && wide_lanes_available(),
             physical: match strands.material.model {
                 Model::Paper => None,
                 Model::Physical => Some(Physical {
@@ -370,11 +376,13 @@ impl Solver {
         // needs no buffer, gives one order), and a strand's result does not
         // depend on its group anyway.
         views.sort_unstable_by_key(|v| (!v.active, v.positions.len(), v.index));
-        // Strands go in groups of four (see `step_group`), groups in a fixed
-        // number of blocks; a strand's result does not depend on its group
-        // or block, so not on the thread count.
-        let groups = views.len().div_ceil(LANES);
-        let block_strands = groups.div_ceil(BLOCKS).max(1) * LANES;
+        // Strands go in groups of four or eight (see `step_group`,
+        // `step_chunk`), groups in a fixed number of blocks; a strand's
+        // result does not depend on its group or block, so not on the
+        // thread count.
+        let groups = views.len().div_ceil(WIDE);
+        let block_strands = groups.div_ceil(BLOCKS).max(1) * WIDE;
+        let chunk = if context.wide { WIDE } else { LANES };
         let block_count = views.len().div_ceil(block_strands);
         if dispatch.blocks.len() < block_count {
             dispatch.blocks.resize_with(block_count, Block::default);
@@ -385,14 +393,8 @@ impl Solver {
             .for_each(|(strands, block)| {
                 block.failed.clear();
                 block.failed.reserve(strands.len());
-                for group in strands.chunks_mut(LANES) {
-                    step_group(
-                        &context,
-                        group,
-                        &mut block.works,
-                        &mut block.group,
-                        &mut block.failed,
-                    );
+                for group in strands.chunks_mut(chunk) {
+                    step_chunk(&context, group, block);
                 }
             });
         dispatch.views = recycle(views);
@@ -570,7 +572,10 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                     q[3] + h * spin[3],
                 ])
             };
-            work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+            if ctx.physical.is_none() {
+                // (The physical model's inertias come from its constants.)
+                work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+            }
         }
         if ctx.physical.is_none() {
             work.stretch[e] =
@@ -975,11 +980,11 @@ fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
 /// The physical model's step of four uniform strands: the direct solve in
 /// `f64` lanes (bit-identical to `solve_direct` on each), collisions and
 /// the rest per strand. Returns the failed ones.
-fn step_group_direct(
+fn step_group_direct<T: Real>(
     ctx: &Context<'_>,
     strands: &mut [StrandMut<'_>],
-    works: &mut [Work; LANES],
-    group: &mut Group,
+    works: &mut [Work],
+    direct: &mut Direct<T>,
     failed: &mut Vec<usize>,
 ) {
     let n = strands[0].positions.len();
@@ -992,10 +997,10 @@ fn step_group_direct(
             work.begin_contacts(ctx, n);
         }
     }
-    let direct = &mut group.direct;
-    direct.begin(&std::array::from_fn::<_, LANES, _>(|lane| {
-        direct_input(&works[lane], n, ctx.dt)
-    }));
+    // (Inputs for the widest group; a narrower one reads its first.)
+    let inputs: [DirectInput<'_>; WIDE] =
+        std::array::from_fn(|lane| direct_input(&works[lane % T::WIDTH], n, ctx.dt));
+    direct.begin(&inputs[..T::WIDTH]);
     for iteration in 0..ctx.iterations {
         direct.iterate_lanes();
         if colliding {
@@ -1024,6 +1029,49 @@ fn step_group_direct(
     }
 }
 
+/// Whether the CPU has the instructions of the eight-wide solve.
+fn wide_lanes_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Up to eight strands' steps: the physical model's direct solve of all
+/// eight in lanes when they are active and of one vertex count (`ctx.wide`,
+/// bit-identical to `step_strand` on each); otherwise groups of four.
+fn step_chunk(ctx: &Context<'_>, strands: &mut [StrandMut<'_>], block: &mut Block) {
+    let n = strands.first().map_or(0, |s| s.positions.len());
+    let uniform = ctx.wide
+        && ctx.physical.is_some()
+        && strands.len() == WIDE
+        && n >= 2
+        && strands.iter().all(|s| s.active && s.positions.len() == n);
+    if uniform {
+        step_group_direct(
+            ctx,
+            strands,
+            &mut block.works,
+            &mut block.wide,
+            &mut block.failed,
+        );
+        return;
+    }
+    for group in strands.chunks_mut(LANES) {
+        step_group(
+            ctx,
+            group,
+            &mut block.works[..LANES],
+            &mut block.group,
+            &mut block.failed,
+        );
+    }
+}
+
 /// Four strands' steps with their constraint sweeps in SIMD lanes when
 /// they are all active and of one vertex count (bit-identical to
 /// `step_strand` on each); otherwise one by one. Adds the failed ones to
@@ -1031,7 +1079,7 @@ fn step_group_direct(
 fn step_group(
     ctx: &Context<'_>,
     strands: &mut [StrandMut<'_>],
-    works: &mut [Work; LANES],
+    works: &mut [Work],
     group: &mut Group,
     failed: &mut Vec<usize>,
 ) {
@@ -1050,7 +1098,7 @@ fn step_group(
         return;
     }
     if ctx.physical.is_some() {
-        step_group_direct(ctx, strands, works, group, failed);
+        step_group_direct(ctx, strands, works, &mut group.direct, failed);
         return;
     }
     for (s, work) in strands.iter().zip(works.iter_mut()) {
@@ -1085,7 +1133,7 @@ fn step_group(
     }
 }
 
-fn lane_inputs(works: &[Work; LANES], n: usize) -> [LaneInput<'_>; LANES] {
+fn lane_inputs(works: &[Work], n: usize) -> [LaneInput<'_>; LANES] {
     let m = n - 1;
     std::array::from_fn(|l| LaneInput {
         p: &works[l].p[..n],

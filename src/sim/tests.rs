@@ -765,21 +765,34 @@ fn bad_input_is_refused_with_a_reason() {
 #[test]
 fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
     // SIMD groups run the paper model's sweep in f32 lanes.
-    assert_groups_match_strands_alone(&paper(), 80);
+    assert_groups_match_strands_alone(&paper(), 80, 13, 3);
 }
 
 #[test]
 fn physical_simd_groups_match_strands_stepped_alone_bit_for_bit() {
     // And the physical model's direct solve in f64x4 lanes.
-    assert_groups_match_strands_alone(&Material::default(), 40);
+    assert_groups_match_strands_alone(&Material::default(), 40, 13, 3);
 }
 
-fn assert_groups_match_strands_alone(material: &Material, steps: usize) {
+#[test]
+fn physical_wide_groups_match_strands_stepped_alone_bit_for_bit() {
+    // 19 strands of one length: two groups of eight (f64x8 lanes where
+    // the CPU has AVX-512, else four of four) and three alone.
+    assert_groups_match_strands_alone(&Material::default(), 40, 19, 1);
+}
+
+/// `count` strands, the `i`-th shortened by `i % lengths` vertices.
+fn assert_groups_match_strands_alone(
+    material: &Material,
+    steps: usize,
+    count: usize,
+    lengths: usize,
+) {
     // Mixed lengths (13 strands of 25, 24 and 23 vertices: sorted into three
     // uniform groups and one single) plus every force.
     let mut strands = Vec::new();
     for (i, strand) in generate(&GeneratorParameters {
-        strands: 13,
+        strands: count,
         shape: StrandShape::Wavy,
         ..Default::default()
     })
@@ -787,7 +800,7 @@ fn assert_groups_match_strands_alone(material: &Material, steps: usize) {
     .strands()
     .enumerate()
     {
-        strands.push(strand[..strand.len() - i % 3].to_vec());
+        strands.push(strand[..strand.len() - i % lengths].to_vec());
     }
     let groom = metres(Groom::from_strands(&strands));
     let mut grouped_set = StrandSet::from_groom(&groom, material).unwrap();
