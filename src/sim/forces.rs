@@ -50,31 +50,54 @@ struct Entry {
 /// Edges generated per chunk of this many vertices: fixed, so the grid's
 /// order does not depend on the thread count.
 const CHUNK_VERTICES: usize = 2048;
-/// Cells per edge above which an edge is left out for the step (only a
-/// strand torn far beyond its rest length gets there).
+/// Cells an edge may cross in the grid; a longer edge (a strand torn far
+/// beyond its rest length) goes on the long-edge list, which every vertex
+/// checks.
 const MAX_CELLS_PER_EDGE: usize = 96;
-/// Cells per edge length: smaller cells mean fewer far edges scanned per
-/// vertex, more entries to sort (measured best at 10k and 100k strands).
-const CELLS_PER_EDGE: f32 = 1.5;
+/// Long edges above which the cells are doubled (and the edges sorted
+/// again), so the list stays short.
+const MAX_LONG_EDGES: usize = 64;
+/// Cell entries at most this many per edge on average: the smallest cell
+/// is the edges' mean extent over this (less one), so the grid's memory
+/// is a bounded multiple of the edge count however dense or torn the hair
+/// is (and reserved once, so a step does not allocate as hair stretches).
+const MAX_ENTRIES_PER_EDGE: f64 = 6.0;
+/// Entries reserved per edge of a chunk: the mean bound, the cells an
+/// edge's ends add, and room for a chunk above the mean.
+const RESERVED_ENTRIES_PER_EDGE: usize = 12;
+/// The largest cell is the longest rest edge over this: an edge stretched
+/// in the step crosses more cells, it does not make cells bigger.
+const CELLS_PER_REST_EDGE: f32 = 1.5;
+/// Cell sizes the cost model tries, geometric between the bounds.
+const CELL_CANDIDATES: usize = 24;
+/// The cost of scanning one entry over that of listing one in its cell
+/// (walked to, written and moved twice by the sort): 0.1 and 0.01 measured
+/// alike at 10k strands, 0.3 and 1 slower (too many small cells).
+const SCAN_COST: f64 = 0.1;
 
 /// The hair-hair penalty (20) of every vertex, found once per step
-/// through a uniform grid of cells of two thirds of the longest edge
-/// (at least the interaction distance `2r`).
+/// through a uniform grid over the edges.
 ///
 /// Each edge sits in every cell its segment passes through (not its box,
 /// not grown by `2r`), each vertex in its own cell; a vertex scans the few
 /// cells its `2r` ball touches, so only edges that pass nearby. Vertices
 /// are visited in cell order, not strand order, so the cells a run of
-/// vertices scans are the same few in memory (visited in strand order,
-/// almost every vertex missed the cache). A vertex-edge pair met in
-/// several cells counts once.
+/// vertices scans are the same few in memory.
+///
+/// The cell size only changes the cost, never a sum: a vertex gathers the
+/// pushes of the edges it finds and adds them in edge order, each edge
+/// once, which is exactly the brute-force sum over all edges of other
+/// strands. So the size can follow the hair: between `2r` (and the
+/// memory bound [`MAX_ENTRIES_PER_EDGE`]) and the longest rest edge, the
+/// one a cost model fitted to the last step's scan finds cheapest (few
+/// entries per edge for sparse guides, small cells for dense hair, where
+/// a big cell holds hundreds of edges a vertex must test).
 ///
 /// Entries are generated in parallel in fixed chunks, counting-sorted into
 /// buckets by cell (a spatial wrap-around index); the sums are computed in
-/// parallel in fixed chunks of the sorted vertices, each vertex's in a
-/// fixed order, so the result is the same for any thread count. The step
-/// then only reads a vertex's sum. All buffers are kept from step to step
-/// (no allocation once warm).
+/// parallel in fixed chunks of the sorted vertices, so the result is the
+/// same for any thread count. The step then only reads a vertex's sum.
+/// All buffers are kept from step to step (no allocation once warm).
 #[derive(Debug, Default)]
 pub struct EdgeGrid {
     inv_cell: f32,
@@ -84,34 +107,93 @@ pub struct EdgeGrid {
     entries: Vec<Entry>,
     /// Per chunk of vertices, its edges' entries in order.
     chunks: Vec<Vec<Entry>>,
+    /// Per chunk of vertices, its edges that cross too many cells.
+    chunk_long_edges: Vec<Vec<u32>>,
+    /// Those edges of all chunks, in order.
+    long_edges: Vec<u32>,
     /// Strand of each vertex of an active strand, `u32::MAX` otherwise.
     owner: Vec<u32>,
     /// The vertices of active strands, sorted by bucket like `entries`.
     vertex_starts: Vec<u32>,
     vertices: Vec<Entry>,
+    /// Per chunk of sorted vertices: the pushes a vertex found (edge,
+    /// push), and how many entries the chunk scanned.
+    found: Vec<Vec<(u32, V3)>>,
+    scanned: Vec<u64>,
     /// Sums in the order of `vertices`, then by vertex index.
     sorted_sums: Vec<V3>,
     sums: Vec<V3>,
     scratch: SortScratch,
+    /// The last build's cell and scan, for the next cell size.
+    last: Option<Measured>,
+}
+
+/// What one build cost, to size the next build's cells.
+#[derive(Debug, Clone, Copy)]
+struct Measured {
+    cell: f64,
+    /// Entries scanned per vertex.
+    scanned: f64,
+}
+
+/// The cell size of a step: edges of mean extent `mean_extent` (sum of
+/// the absolute coordinate differences, m), interaction reach `reach`,
+/// longest rest edge `rest_longest`. Without a last build, the largest
+/// cell (a few entries per edge). Otherwise the candidate minimising
+/// entries per edge `1 + mean / c` plus entries scanned per vertex, which
+/// grows as `(c + mean) (c + 2 reach)^3 / c` (the edges per cell times
+/// the cells a `2 reach` box touches), scaled to what the last build
+/// scanned at its cell size.
+fn cell_size(reach: f32, rest_longest: f32, mean_extent: f64, last: Option<Measured>) -> f32 {
+    let reach = f64::from(reach);
+    let lo = reach.max(mean_extent / (MAX_ENTRIES_PER_EDGE - 1.0));
+    let hi = lo.max(f64::from(rest_longest / CELLS_PER_REST_EDGE));
+    let scan_shape = |c: f64| (c + mean_extent) * (c + 2.0 * reach).powi(3) / c;
+    let chosen = match last {
+        Some(last) if last.scanned > 0.0 && hi > lo => {
+            let scale = last.scanned / scan_shape(last.cell);
+            let cost = |c: f64| 1.0 + mean_extent / c + SCAN_COST * scale * scan_shape(c);
+            let ratio = (hi / lo).powf(1.0 / (CELL_CANDIDATES - 1) as f64);
+            let mut best = (lo, cost(lo));
+            let mut c = lo;
+            for _ in 1..CELL_CANDIDATES {
+                c *= ratio;
+                let here = cost(c);
+                if here < best.1 {
+                    best = (c, here);
+                }
+            }
+            best.0
+        }
+        _ => hi,
+    };
+    if chosen.is_finite() && chosen > 0.0 {
+        chosen as f32
+    } else {
+        // Degenerate input (no finite edge): any cell will do.
+        reach.max(1e-6) as f32
+    }
+}
+
+/// `floor` as an integer, saturating far away (truncation, then one down
+/// for negatives: `floor` is a libm call on baseline x86-64).
+#[inline]
+fn floor_i32(x: f32) -> i32 {
+    let t = x as i32;
+    if (t as f32) > x {
+        t - 1
+    } else {
+        t
+    }
 }
 
 #[inline]
 fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
-    // Saturating float-to-int casts keep far-away points in the end cells
-    // (truncation, then one down for negatives: `floor` is a libm call on
-    // baseline x86-64).
-    let floor = |x: f32| {
-        let t = x as i32;
-        if (t as f32) > x {
-            t - 1
-        } else {
-            t
-        }
-    };
+    // Saturating float-to-int casts keep far-away points in the end cells.
     [
-        floor(p[0] * inv_cell),
-        floor(p[1] * inv_cell),
-        floor(p[2] * inv_cell),
+        floor_i32(p[0] * inv_cell),
+        floor_i32(p[1] * inv_cell),
+        floor_i32(p[2] * inv_cell),
     ]
 }
 
@@ -209,7 +291,9 @@ fn sort_into_buckets(
     use rayon::prelude::*;
     let buckets = 1usize << (3 * bits);
     let per_part = buckets / PARTS;
-    let part_of = |e: &Entry| bucket_of(unpack(e.key), bits) / per_part;
+    // Both powers of two: a shift, not a division per entry.
+    let part_shift = per_part.trailing_zeros();
+    let part_of = |e: &Entry| bucket_of(unpack(e.key), bits) >> part_shift;
     if scratch.grouped.len() < chunks.len() {
         scratch.grouped.resize_with(chunks.len(), Vec::new);
     }
@@ -228,6 +312,8 @@ fn sort_into_buckets(
             }
             let mut cursor = *part_starts;
             grouped.clear();
+            // As much room as the chunk has: no allocation as it fills.
+            grouped.reserve(chunk.capacity());
             grouped.resize(chunk.len(), Entry::default());
             for e in chunk {
                 let slot = &mut cursor[part_of(e)];
@@ -239,6 +325,7 @@ fn sort_into_buckets(
     let part_starts = &scratch.part_starts;
     let total: usize = chunks.iter().map(Vec::len).sum();
     out.clear();
+    out.reserve(chunks.iter().map(Vec::capacity).sum());
     out.resize(total, Entry::default());
     starts.clear();
     starts.resize(buckets + 1, 0);
@@ -298,88 +385,159 @@ fn unpack(key: u32) -> [i32; 3] {
     ]
 }
 
+/// Bits per axis for about one bucket per item or two: at least 2 (64
+/// buckets, one per part of the sort), at most 7 (2 million buckets, 8 MB
+/// of starts: more would cost more to clear than aliasing cells do).
+fn bucket_bits(items: usize) -> u32 {
+    let mut bits = 2;
+    while (1usize << (3 * bits)) < items && bits < 7 {
+        bits += 1;
+    }
+    bits
+}
+
 impl EdgeGrid {
     /// Finds the penalty sums of every vertex of the `active` strands
-    /// (`offsets` as in StrandSet) at `positions`, for hair radius `radius`.
-    pub fn build(&mut self, positions: &[V3], offsets: &[usize], active: &[bool], radius: f32) {
-        use rayon::prelude::*;
+    /// (`offsets` as in StrandSet) at `positions`, for hair radius `radius`;
+    /// `rest_longest` is the longest rest edge (bounds the cell size).
+    pub fn build(
+        &mut self,
+        positions: &[V3],
+        offsets: &[usize],
+        active: &[bool],
+        radius: f32,
+        rest_longest: f32,
+    ) {
         let reach = 2.0 * radius;
+        self.find_owners(positions.len(), offsets, active);
+        let mean_extent = self.mean_edge_extent(positions);
+        let mut cell = cell_size(reach, rest_longest, mean_extent, self.last);
+        let chunk_count = positions.len().div_ceil(CHUNK_VERTICES);
+        // Torn strands: bigger cells until few edges are left over.
+        while self.generate_entries(positions, chunk_count, 1.0 / cell) > MAX_LONG_EDGES
+            && cell < f32::MAX / 4.0
+        {
+            cell *= 2.0;
+        }
+        self.inv_cell = 1.0 / cell;
+        self.sort_entries(positions, chunk_count);
+        let scanned = self.sum_pushes(positions, reach);
+        self.last = Some(Measured {
+            cell: f64::from(cell),
+            scanned: scanned as f64 / self.vertices.len().max(1) as f64,
+        });
+    }
+
+    /// The strand of each vertex of an active strand.
+    fn find_owners(&mut self, vertex_count: usize, offsets: &[usize], active: &[bool]) {
         self.owner.clear();
-        self.owner.resize(positions.len(), u32::MAX);
+        self.owner.resize(vertex_count, u32::MAX);
         for (strand, w) in offsets.windows(2).enumerate() {
             if active[strand] {
                 self.owner[w[0]..w[1]].fill(strand as u32);
             }
         }
+    }
+
+    /// The strand of the edge starting at `v`, when `v + 1` is of the same
+    /// active strand.
+    #[inline]
+    fn edge_strand(owner: &[u32], v: usize) -> Option<u32> {
+        let strand = owner[v];
+        (strand != u32::MAX && owner.get(v + 1) == Some(&strand)).then_some(strand)
+    }
+
+    /// The mean `|dx| + |dy| + |dz|` of the finite edges
+    /// (about the cells an edge crosses times the cell size), summed in
+    /// whole micrometres: exact in any order, so the cell size does not
+    /// depend on the thread count.
+    fn mean_edge_extent(&self, positions: &[V3]) -> f64 {
+        use rayon::prelude::*;
         let owner = &self.owner;
-        // An edge starts at `v` when `v + 1` is of the same active strand.
-        let edge_of = |v: usize| -> Option<u32> {
-            let strand = owner[v];
-            (strand != u32::MAX && owner.get(v + 1) == Some(&strand)).then_some(strand)
-        };
-        // Cells from the longest edge (max is exact in any order).
-        let longest = positions
-            .par_iter()
-            .enumerate()
+        let (count, micrometres) = (0..positions.len().saturating_sub(1))
+            .into_par_iter()
             .with_min_len(CHUNK_VERTICES)
-            .filter(|(v, _)| edge_of(*v).is_some())
-            .map(|(v, a)| {
-                let d = sub(positions[v + 1], *a);
-                if is_finite3(d) {
-                    d[0].abs().max(d[1].abs()).max(d[2].abs())
+            .filter(|&v| Self::edge_strand(owner, v).is_some())
+            .map(|v| {
+                let d = sub(positions[v + 1], positions[v]);
+                let extent = f64::from(d[0].abs() + d[1].abs() + d[2].abs());
+                if extent.is_finite() {
+                    (1u64, (extent * 1e6).min(1e12) as u64)
                 } else {
-                    0.0
+                    (0, 0)
                 }
             })
-            .reduce(|| 0.0, f32::max);
-        let cell = (longest / CELLS_PER_EDGE).max(reach);
-        let inv_cell = 1.0 / cell;
-        self.inv_cell = inv_cell;
-        let chunk_count = positions.len().div_ceil(CHUNK_VERTICES);
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.saturating_add(b.1)));
+        if count > 0 {
+            micrometres as f64 * 1e-6 / count as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// Each chunk's edges into the cells they cross; returns how many
+    /// edges cross too many (kept on the long-edge list).
+    fn generate_entries(&mut self, positions: &[V3], chunk_count: usize, inv_cell: f32) -> usize {
+        use rayon::prelude::*;
         if self.chunks.len() < chunk_count {
             self.chunks.resize_with(chunk_count, Vec::new);
         }
+        if self.chunk_long_edges.len() < chunk_count {
+            self.chunk_long_edges.resize_with(chunk_count, Vec::new);
+        }
+        let owner = &self.owner;
         self.chunks[..chunk_count]
             .par_iter_mut()
+            .zip(self.chunk_long_edges[..chunk_count].par_iter_mut())
             .enumerate()
-            .for_each(|(k, out)| {
+            .for_each(|(k, (out, long))| {
                 out.clear();
+                if out.capacity() == 0 {
+                    out.reserve(CHUNK_VERTICES * RESERVED_ENTRIES_PER_EDGE);
+                    long.reserve(MAX_LONG_EDGES);
+                }
+                long.clear();
                 let mut cells = [0u32; MAX_CELLS_PER_EDGE];
                 let first = k * CHUNK_VERTICES;
                 for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
-                    let Some(strand) = edge_of(v) else {
+                    let Some(strand) = Self::edge_strand(owner, v) else {
                         continue;
                     };
                     let (a, b) = (positions[v], positions[v + 1]);
                     if !(is_finite3(a) && is_finite3(b)) {
                         continue;
                     }
-                    if let Some(n) = edge_cells(a, b, inv_cell, &mut cells) {
-                        out.extend(cells[..n].iter().map(|&key| Entry {
+                    match edge_cells(a, b, inv_cell, &mut cells) {
+                        Some(n) => out.extend(cells[..n].iter().map(|&key| Entry {
                             key,
                             edge: v as u32,
                             strand,
-                        }));
+                        })),
+                        None => long.push(v as u32),
                     }
                 }
             });
-        let total: usize = self.chunks[..chunk_count].iter().map(Vec::len).sum();
-        // About one bucket per entry or two, a power of two per axis.
-        // At least 2 bits: 64 buckets, one per part.
-        let mut bits = 2;
-        while (1usize << (3 * bits)) < total && bits < 9 {
-            bits += 1;
+        self.long_edges.clear();
+        self.long_edges.reserve(2 * MAX_LONG_EDGES);
+        for long in &self.chunk_long_edges[..chunk_count] {
+            self.long_edges.extend_from_slice(long);
         }
-        self.axis_bits = bits;
+        self.long_edges.len()
+    }
+
+    /// The entries, then the vertices, counting-sorted by bucket.
+    fn sort_entries(&mut self, positions: &[V3], chunk_count: usize) {
+        use rayon::prelude::*;
+        let total: usize = self.chunks[..chunk_count].iter().map(Vec::len).sum();
+        self.axis_bits = bucket_bits(total);
         sort_into_buckets(
             &self.chunks[..chunk_count],
-            bits,
+            self.axis_bits,
             &mut self.scratch,
             &mut self.starts,
             &mut self.entries,
         );
-
-        // The vertices, in cell order.
+        let (owner, inv_cell) = (&self.owner, self.inv_cell);
         self.chunks[..chunk_count]
             .par_iter_mut()
             .enumerate()
@@ -397,31 +555,50 @@ impl EdgeGrid {
                     }
                 }
             });
+        // The vertices' order only needs to be local: their own (fewer)
+        // buckets.
         sort_into_buckets(
             &self.chunks[..chunk_count],
-            bits,
+            bucket_bits(self.owner.len()),
             &mut self.scratch,
             &mut self.vertex_starts,
             &mut self.vertices,
         );
+    }
+
+    /// Every vertex's penalty sum, in parallel over fixed chunks of the
+    /// sorted vertices; returns the entries scanned.
+    fn sum_pushes(&mut self, positions: &[V3], reach: f32) -> u64 {
+        use rayon::prelude::*;
         let count = self.vertices.len();
+        let chunk_count = count.div_ceil(CHUNK_VERTICES);
+        if self.found.len() < chunk_count {
+            // Room for a dense tangle's pushes, so a warm step does not grow them.
+            self.found
+                .resize_with(chunk_count, || Vec::with_capacity(256));
+        }
+        self.scanned.clear();
+        self.scanned.resize(chunk_count, 0);
         self.sorted_sums.clear();
         self.sorted_sums.resize(count, [0.0; 3]);
-        let (entries, starts) = (&self.entries, &self.starts);
+        let lookup = Lookup {
+            entries: &self.entries,
+            starts: &self.starts,
+            long_edges: &self.long_edges,
+            owner: &self.owner,
+            positions,
+            inv_cell: self.inv_cell,
+            bits: self.axis_bits,
+            reach,
+        };
         self.sorted_sums
             .par_chunks_mut(CHUNK_VERTICES)
             .zip(self.vertices.par_chunks(CHUNK_VERTICES))
-            .for_each(|(sums, vertices)| {
+            .zip(self.found[..chunk_count].par_iter_mut())
+            .zip(self.scanned.par_iter_mut())
+            .for_each(|(((sums, vertices), found), scanned)| {
                 for (sum, v) in sums.iter_mut().zip(vertices) {
-                    *sum = penalty_sum(
-                        entries,
-                        starts,
-                        positions,
-                        (inv_cell, bits),
-                        positions[v.edge as usize],
-                        v.strand,
-                        reach,
-                    );
+                    *sum = lookup.penalty_sum(positions[v.edge as usize], v.strand, found, scanned);
                 }
             });
         self.sums.clear();
@@ -429,6 +606,7 @@ impl EdgeGrid {
         for (v, sum) in self.vertices.iter().zip(&self.sorted_sums) {
             self.sums[v.edge as usize] = *sum;
         }
+        self.scanned.iter().sum()
     }
 
     /// The penalty velocity change (20) at vertex `vertex` (global index)
@@ -442,69 +620,102 @@ impl EdgeGrid {
     }
 }
 
-/// `sum (p - foot) (2r - d) / (2r d)` over the edges of other strands
-/// within `2r` of `p` (d the distance to the foot point), each once.
-fn penalty_sum(
-    entries: &[Entry],
-    starts: &[u32],
-    positions: &[V3],
-    (inv_cell, bits): (f32, u32),
-    p: V3,
-    strand: u32,
-    reach: f32,
-) -> V3 {
-    let mut dv = [0.0f32; 3];
-    let lo = cell_of([p[0] - reach, p[1] - reach, p[2] - reach], inv_cell);
-    let hi = cell_of([p[0] + reach, p[1] + reach, p[2] + reach], inv_cell);
-    if (0..3).any(|c| i64::from(hi[c]) - i64::from(lo[c]) > 2) {
-        // Far-off (saturated) coordinates.
-        return dv;
+/// The push of (20) on a vertex at `p` from edge `a`-`b`:
+/// `(p - foot) (2r - d) / (2r d)` when the distance `d` to the foot point
+/// is below `reach` = `2r` (and not zero).
+#[inline]
+fn edge_push(p: V3, a: V3, b: V3, reach: f32) -> Option<V3> {
+    let ab = sub(b, a);
+    let ab2 = dot(ab, ab);
+    let t = if ab2 > 0.0 {
+        (dot(sub(p, a), ab) / ab2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let foot = [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t];
+    let d = sub(p, foot);
+    let dist2 = dot(d, d);
+    if !(dist2 < reach * reach && dist2 > 0.0) {
+        return None;
     }
-    let mut seen = [0u32; 64];
-    let mut found = 0;
-    for x in lo[0]..=hi[0] {
-        for y in lo[1]..=hi[1] {
-            for z in lo[2]..=hi[2] {
-                let here = [x, y, z];
-                let key = pack(here);
-                let bucket = bucket_of(here, bits);
-                let (start, end) = (starts[bucket] as usize, starts[bucket + 1] as usize);
-                for e in &entries[start..end] {
-                    if e.key != key || e.strand == strand {
-                        continue;
+    let dist = dist2.sqrt();
+    let k = (reach - dist) / reach / dist;
+    Some([d[0] * k, d[1] * k, d[2] * k])
+}
+
+/// The sorted grid, read by every vertex's sum.
+struct Lookup<'a> {
+    entries: &'a [Entry],
+    starts: &'a [u32],
+    long_edges: &'a [u32],
+    owner: &'a [u32],
+    positions: &'a [V3],
+    inv_cell: f32,
+    bits: u32,
+    reach: f32,
+}
+
+impl Lookup<'_> {
+    /// The sum of [`edge_push`] over the edges of other strands within
+    /// `reach` of `p`, each once, in edge order (so the sum does not
+    /// depend on the cells); `found` is scratch, `scanned` counts the
+    /// entries looked at.
+    fn penalty_sum(&self, p: V3, strand: u32, found: &mut Vec<(u32, V3)>, scanned: &mut u64) -> V3 {
+        let reach = self.reach;
+        found.clear();
+        let lo = cell_of([p[0] - reach, p[1] - reach, p[2] - reach], self.inv_cell);
+        let hi = cell_of([p[0] + reach, p[1] + reach, p[2] + reach], self.inv_cell);
+        // More than 3 cells per axis only at far-off (saturated) coordinates.
+        if (0..3).all(|c| i64::from(hi[c]) - i64::from(lo[c]) <= 2) {
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        let here = [x, y, z];
+                        let key = pack(here);
+                        let bucket = bucket_of(here, self.bits);
+                        let (start, end) = (
+                            self.starts[bucket] as usize,
+                            self.starts[bucket + 1] as usize,
+                        );
+                        *scanned += (end - start) as u64;
+                        for e in &self.entries[start..end] {
+                            if e.key != key || e.strand == strand {
+                                continue;
+                            }
+                            self.push_from(p, e.edge, found);
+                        }
                     }
-                    let a = positions[e.edge as usize];
-                    let b = positions[e.edge as usize + 1];
-                    let ab = sub(b, a);
-                    let ab2 = dot(ab, ab);
-                    let t = if ab2 > 0.0 {
-                        (dot(sub(p, a), ab) / ab2).clamp(0.0, 1.0)
-                    } else {
-                        0.0
-                    };
-                    let foot = [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t];
-                    let d = sub(p, foot);
-                    let dist2 = dot(d, d);
-                    if !(dist2 < reach * reach && dist2 > 0.0) {
-                        continue;
-                    }
-                    // An edge met in several of the scanned cells counts
-                    // once (the first time).
-                    if seen[..found].contains(&e.edge) {
-                        continue;
-                    }
-                    if found < seen.len() {
-                        seen[found] = e.edge;
-                        found += 1;
-                    }
-                    let dist = dist2.sqrt();
-                    let k = (reach - dist) / reach / dist;
-                    dv = [dv[0] + d[0] * k, dv[1] + d[1] * k, dv[2] + d[2] * k];
                 }
             }
         }
+        for &edge in self.long_edges {
+            if self.owner[edge as usize] != strand {
+                self.push_from(p, edge, found);
+            }
+        }
+        // An edge met in several cells pushes the same each time: once.
+        found.sort_unstable_by_key(|&(edge, _)| edge);
+        let mut dv = [0.0f32; 3];
+        let mut previous = None;
+        for &(edge, push) in found.iter() {
+            if previous != Some(edge) {
+                dv = [dv[0] + push[0], dv[1] + push[1], dv[2] + push[2]];
+                previous = Some(edge);
+            }
+        }
+        dv
     }
-    dv
+
+    #[inline]
+    fn push_from(&self, p: V3, edge: u32, found: &mut Vec<(u32, V3)>) {
+        let (a, b) = (
+            self.positions[edge as usize],
+            self.positions[edge as usize + 1],
+        );
+        if let Some(push) = edge_push(p, a, b, self.reach) {
+            found.push((edge, push));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -540,7 +751,7 @@ mod tests {
         ];
         let offsets = [0, 2, 4];
         let mut grid = EdgeGrid::default();
-        grid.build(&positions, &offsets, &[true, true], 4e-5);
+        grid.build(&positions, &offsets, &[true, true], 4e-5, 0.01);
         let dv = grid.penalty_dv(0, 1.0, 1.0);
         // Distance 1e-5 of 8e-5: (8 - 1) / 8 away from the other edge (-x).
         assert!((dv[0] + 7.0 / 8.0).abs() < 1e-5, "{dv:?}");
@@ -575,52 +786,93 @@ mod tests {
         (positions, offsets)
     }
 
-    /// (20) summed over every edge of every other strand.
-    fn brute_force(positions: &[V3], offsets: &[usize], p: V3, strand: usize, radius: f32) -> V3 {
-        let reach = 2.0 * radius;
+    /// (20) summed over every edge of every other active strand, in edge
+    /// order.
+    fn brute_force(
+        positions: &[V3],
+        offsets: &[usize],
+        active: &[bool],
+        vertex: usize,
+        radius: f32,
+    ) -> V3 {
+        let strand = offsets.partition_point(|&o| o <= vertex) - 1;
         let mut dv = [0.0f32; 3];
+        if !active[strand] {
+            return dv;
+        }
         for (s, w) in offsets.windows(2).enumerate() {
-            if s == strand {
+            if s == strand || !active[s] {
                 continue;
             }
             for v in w[0]..w[1] - 1 {
                 let (a, b) = (positions[v], positions[v + 1]);
-                let ab = sub(b, a);
-                let t = (dot(sub(p, a), ab) / dot(ab, ab)).clamp(0.0, 1.0);
-                let d = sub(p, [a[0] + ab[0] * t, a[1] + ab[1] * t, a[2] + ab[2] * t]);
-                let dist = length(d);
-                if dist < reach && dist > 0.0 {
-                    dv = super::super::math::add(dv, scale(d, (reach - dist) / reach / dist));
+                if let Some(push) = edge_push(positions[vertex], a, b, 2.0 * radius) {
+                    dv = [dv[0] + push[0], dv[1] + push[1], dv[2] + push[2]];
                 }
             }
         }
         dv
     }
 
-    #[test]
-    fn the_grid_finds_every_pair_within_two_radii_once() {
-        let (positions, offsets) = tangle(60, 12);
+    /// Builds the grid three times (its cell size adapts to the last
+    /// build) and checks every vertex's sum against brute force, bit for
+    /// bit; returns how many vertices touched another strand.
+    fn check_against_brute_force(
+        positions: &[V3],
+        offsets: &[usize],
+        active: &[bool],
+        rest_longest: f32,
+    ) -> (usize, EdgeGrid) {
         let radius = 1e-4;
         let mut grid = EdgeGrid::default();
-        grid.build(&positions, &offsets, &[true; 60], radius);
         let mut touching = 0;
-        for (s, w) in offsets.windows(2).enumerate() {
-            for v in w[0]..w[1] {
-                let expected = brute_force(&positions, &offsets, positions[v], s, radius);
+        let mut cells = Vec::new();
+        for _ in 0..3 {
+            grid.build(positions, offsets, active, radius, rest_longest);
+            cells.push(1.0 / grid.inv_cell);
+            touching = 0;
+            for v in 0..positions.len() {
+                let expected = brute_force(positions, offsets, active, v, radius);
                 let got = grid.penalty_dv(v, 1.0, 1.0);
                 if expected != [0.0; 3] {
                     touching += 1;
                 }
-                for c in 0..3 {
-                    assert!(
-                        (got[c] - expected[c]).abs() <= 1e-5 * (1.0 + expected[c].abs()),
-                        "strand {s}: {got:?} vs {expected:?}"
-                    );
-                }
+                assert_eq!(
+                    got.map(f32::to_bits),
+                    expected.map(f32::to_bits),
+                    "vertex {v} with cells {cells:?}: {got:?} vs {expected:?}"
+                );
             }
         }
-        // The test means something only if vertices touched other strands.
+        (touching, grid)
+    }
+
+    #[test]
+    fn the_grid_finds_exactly_the_pairs_brute_force_finds() {
+        let (mut positions, offsets) = tangle(60, 12);
+        // Over-stretched edges: a vertex pulled 2 cm off (an edge crossing
+        // many cells), and one pulled half a metre off through the tangle
+        // (too many cells: the long-edge list).
+        positions[offsets[3] + 5][1] += 0.02;
+        positions[offsets[7] + 4] = [0.5, 0.002, 0.002];
+        let active: Vec<bool> = (0..60).map(|s| s % 11 != 5).collect();
+        let (touching, grid) = check_against_brute_force(&positions, &offsets, &active, 0.003);
+        // The test means something only if vertices touched other strands
+        // and the torn edges were on the long list.
         assert!(touching > 30, "{touching}");
+        assert!(!grid.long_edges.is_empty());
+        assert!(1.0 / grid.inv_cell < 0.003);
+    }
+
+    #[test]
+    fn many_torn_strands_make_bigger_cells_not_a_long_list_to_scan() {
+        let (mut positions, offsets) = tangle(200, 8);
+        for s in 0..100 {
+            positions[offsets[s] + 3] = [1.0 + s as f32 * 0.01, 0.5, 0.001];
+        }
+        let (touching, grid) = check_against_brute_force(&positions, &offsets, &[true; 200], 0.003);
+        assert!(touching > 30, "{touching}");
+        assert!(grid.long_edges.len() <= MAX_LONG_EDGES);
     }
 
     #[test]
@@ -634,7 +886,7 @@ mod tests {
                 .unwrap();
             pool.install(|| {
                 let mut grid = EdgeGrid::default();
-                grid.build(&positions, &offsets, &active, 1e-4);
+                grid.build(&positions, &offsets, &active, 1e-4, 0.003);
                 let mut out = Vec::new();
                 for v in 0..positions.len() {
                     let dv = grid.penalty_dv(v, 5.0, 1.0 / 360.0);

@@ -326,7 +326,23 @@ impl Solver {
             Some(alpha) if alpha > 0.0 => {
                 snapshot.clear();
                 snapshot.extend_from_slice(&strands.positions);
-                grid.build(snapshot, &strands.offsets, active, parameters.hair_radius);
+                let rest_longest = {
+                    use rayon::prelude::*;
+                    strands
+                        .edges
+                        .par_iter()
+                        .with_min_len(4096)
+                        .map(|e| e.rest_length)
+                        .filter(|l| l.is_finite())
+                        .reduce(|| 0.0, f32::max)
+                };
+                grid.build(
+                    snapshot,
+                    &strands.offsets,
+                    active,
+                    parameters.hair_radius,
+                    rest_longest,
+                );
                 Some(alpha)
             }
             _ => None,
