@@ -52,7 +52,8 @@ pub struct Workload {
     /// Render hairs grown between the strands (which are then guides),
     /// interpolated and exported every frame; `None`: none.
     pub render: Option<usize>,
-    /// A pillow: a slab (8 x 40 x 40 cm) pressed against the left side of
+    /// A pillow: a slab (8 x 40 x 40 cm) that moves in from outside the hair
+    /// and presses against the left side of
     /// the head, as in `samples/full_head.toml`.
     pub pillow: bool,
 }
@@ -192,15 +193,9 @@ impl Workload {
             colliders.insert(Collider::new("head", shape, Pose::IDENTITY, 0.3));
         }
         if self.pillow {
-            let pose = Pose::from_parts(
-                Vector::new(-0.135, 0.0, 0.0),
-                crate::sim::parry3d::math::Rot3::from_axis_angle(
-                    Vector::Z,
-                    (-10.0f32).to_radians(),
-                ),
-            );
             let slab = SharedShape::cuboid(0.04, 0.2, 0.2);
-            colliders.insert(Collider::new("pillow", slab, pose, 0.6));
+            let pose = pillow_pose(0.0);
+            colliders.insert(Collider::new(PILLOW, slab, pose, 0.6));
         }
         let delivery = match self.render {
             Some(count) => Some(Delivery::start(&groom, &solver, count)?),
@@ -279,12 +274,34 @@ impl Delivery {
     }
 }
 
+/// The pillow collider's name.
+const PILLOW: &str = "pillow";
+
+/// Where the pillow is `t` seconds into the run. It comes in from outside
+/// the hair (its inner face starts at x = -0.36 m, beyond the 24 cm strands'
+/// reach) at the full-head sample's 18 cm/s and stops pressed against the
+/// left of the head at x = -0.135 m (after about 1.5 s): a collider placed
+/// inside the hair would cut strands apart, not press them.
+fn pillow_pose(t: f32) -> Pose {
+    const START_X: f32 = -0.40;
+    const PRESSED_X: f32 = -0.135;
+    const SPEED: f32 = 0.18;
+    Pose::from_parts(
+        Vector::new((START_X + SPEED * t).min(PRESSED_X), 0.0, 0.0),
+        crate::sim::parry3d::math::Rot3::from_axis_angle(Vector::Z, (-10.0f32).to_radians()),
+    )
+}
+
 /// Distinguishes the exports of one process.
 static NEXT_EXPORT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 impl Scene {
     /// One step of the workload.
     pub fn step(&mut self) -> Result<(), BenchError> {
+        let dt = self.solver.parameters().dt;
+        if let Some(pillow) = self.colliders.get_mut(PILLOW) {
+            pillow.move_to(pillow_pose((self.steps + 1) as f32 * dt), dt);
+        }
         let report =
             self.solver
                 .step(&mut self.strands, &self.colliders, &Environment::default())?;
