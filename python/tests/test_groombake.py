@@ -167,7 +167,7 @@ def test_progress_is_monotone_and_reaches_one(tmp_path):
 
 
 def test_bake_releases_the_gil(tmp_path):
-    timeline = gb.Timeline.load(str(write_timeline(tmp_path, dry=25.0)))
+    timeline = gb.Timeline.load(str(write_timeline(tmp_path, dry=100.0)))
     ticks = []
     stop = threading.Event()
 
