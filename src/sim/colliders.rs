@@ -309,6 +309,20 @@ pub(crate) fn project_contact(
     }
 }
 
+/// The shipped head mesh (`samples/head.obj`, metres, Y up) as a vertex and
+/// triangle list, for tests of mesh colliders.
+#[cfg(test)]
+pub(crate) fn sample_head() -> (Vec<Vector>, Vec<[u32; 3]>) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
+    let (vertices, triangles) =
+        importers::mesh::read_triangles(std::path::Path::new(path)).expect("samples/head.obj");
+    let vertices = vertices
+        .iter()
+        .map(|v| Vector::new(v[0], v[1], v[2]))
+        .collect();
+    (vertices, triangles)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -365,13 +379,7 @@ mod tests {
     fn a_moving_mesh_head_leaves_every_vertex_a_radius_outside() {
         use parry3d::query::PointQuery;
         use parry3d::shape::{TriMesh, TriMeshFlags};
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
-        let (vertices, triangles) =
-            importers::mesh::read_triangles(std::path::Path::new(path)).expect("head");
-        let vertices: Vec<Vector> = vertices
-            .iter()
-            .map(|v| Vector::new(v[0], v[1], v[2]))
-            .collect();
+        let (vertices, triangles) = sample_head();
         let exact =
             TriMesh::with_flags(vertices.clone(), triangles.clone(), TriMeshFlags::ORIENTED)
                 .expect("mesh");

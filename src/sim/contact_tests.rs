@@ -268,13 +268,7 @@ fn pillow_pinch_strain(head: SharedShape) -> (f64, usize, f32) {
 /// contact, the hair pushed 19-20 cm towards the head.
 #[test]
 fn edges_keep_their_length_while_a_pillow_pins_hair_against_the_head() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
-    let (vertices, triangles) =
-        importers::mesh::read_triangles(std::path::Path::new(path)).expect("samples/head.obj");
-    let vertices = vertices
-        .iter()
-        .map(|v| Vector::new(v[0], v[1], v[2]))
-        .collect();
+    let (vertices, triangles) = crate::sim::colliders::sample_head();
     let mesh = SharedShape::trimesh(vertices, triangles).unwrap();
     for (name, head) in [("ball", SharedShape::ball(0.08)), ("mesh", mesh)] {
         let (worst, touched_steps, pushed) = pillow_pinch_strain(head);

@@ -330,13 +330,7 @@ mod tests {
     use super::*;
 
     fn head() -> TriMesh {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
-        let (vertices, triangles) =
-            importers::mesh::read_triangles(std::path::Path::new(path)).expect("samples/head.obj");
-        let vertices = vertices
-            .iter()
-            .map(|v| Vector::new(v[0], v[1], v[2]))
-            .collect();
+        let (vertices, triangles) = crate::sim::colliders::sample_head();
         TriMesh::with_flags(vertices, triangles, TriMeshFlags::ORIENTED).expect("head mesh")
     }
 
