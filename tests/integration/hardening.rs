@@ -62,13 +62,13 @@ fn assert_one_line(stderr: &str) {
 
 // --- The resource budget ---------------------------------------------------
 
-/// Runs groombake with its address space limited to 2 GB: a run that tried
-/// to allocate the groom would abort instead of exiting 2.
-fn run_limited(dir: &TestDir, args: &str) -> (Option<i32>, String) {
+/// Runs groombake through `sh` after the shell commands `setup` (limits,
+/// traps), in the test's folder: exit code and standard error.
+fn run_in_shell(dir: &TestDir, setup: &str, args: &str) -> (Option<i32>, String) {
     let output = Command::new("sh")
         .arg("-c")
         .arg(format!(
-            "ulimit -v 2000000; exec '{}' {args}",
+            "{setup}; exec '{}' {args}",
             env!("CARGO_BIN_EXE_groombake")
         ))
         .current_dir(dir.root())
@@ -78,6 +78,12 @@ fn run_limited(dir: &TestDir, args: &str) -> (Option<i32>, String) {
         output.status.code(),
         String::from_utf8_lossy(&output.stderr).into_owned(),
     )
+}
+
+/// Runs groombake with its address space limited to 2 GB: a run that tried
+/// to allocate the groom would abort instead of exiting 2.
+fn run_limited(dir: &TestDir, args: &str) -> (Option<i32>, String) {
+    run_in_shell(dir, "ulimit -v 2000000", args)
 }
 
 #[test]
@@ -548,19 +554,10 @@ fn a_later_bake_removes_stale_temporaries_of_dead_processes_only() {
 /// SIGXFSZ ignored, so a write past the limit fails with EFBIG as a write
 /// to a full disk fails with ENOSPC: the same failed `write` to the bake.
 fn run_with_file_size_limit(dir: &TestDir, max_bytes: u64, args: &str) -> (Option<i32>, String) {
-    let output = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "trap '' XFSZ; ulimit -f {}; exec '{}' {args}",
-            max_bytes / 512,
-            env!("CARGO_BIN_EXE_groombake")
-        ))
-        .current_dir(dir.root())
-        .output()
-        .unwrap();
-    (
-        output.status.code(),
-        String::from_utf8_lossy(&output.stderr).into_owned(),
+    run_in_shell(
+        dir,
+        &format!("trap '' XFSZ; ulimit -f {}", max_bytes / 512),
+        args,
     )
 }
 

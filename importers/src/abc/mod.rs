@@ -279,6 +279,19 @@ mod tests {
         assert!(text.contains("used twice"), "{text}");
     }
 
+    /// `sample_groom` standing still at three uneven (acyclic) times.
+    fn sample_groom_at_uneven_times() -> Groom {
+        let mut groom = sample_groom();
+        groom.frames = [0.0, 0.1, 0.35]
+            .iter()
+            .map(|&time| Frame {
+                time,
+                points: groom.points.clone(),
+            })
+            .collect();
+        groom
+    }
+
     fn sample_groom() -> Groom {
         let mut groom = Groom::from_strands([
             vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.5]],
@@ -425,14 +438,7 @@ mod tests {
     #[test]
     fn uneven_frame_times_are_kept() {
         let dir = TempDir::new("acyclic");
-        let mut groom = sample_groom();
-        groom.frames = [0.0, 0.1, 0.35]
-            .iter()
-            .map(|&time| Frame {
-                time,
-                points: groom.points.clone(),
-            })
-            .collect();
+        let groom = sample_groom_at_uneven_times();
         let path = dir.0.join("acyclic.abc");
         exporters::write(&path, &groom).unwrap();
         let back = read(&path).unwrap();
@@ -446,14 +452,7 @@ mod tests {
     #[test]
     fn regression_time_sampling_with_no_stored_times_says_so() {
         let dir = TempDir::new("times");
-        let mut groom = sample_groom();
-        groom.frames = [0.0, 0.1, 0.35]
-            .iter()
-            .map(|&time| Frame {
-                time,
-                points: groom.points.clone(),
-            })
-            .collect();
+        let groom = sample_groom_at_uneven_times();
         let bytes = exported(&dir, "times.abc", &groom);
         // The archive's fifth child holds the time samplings, each
         // `u32 max samples, f64 time per cycle, u32 count, f64 times[count]`.
