@@ -1,8 +1,9 @@
 //! External forces and interactions of 000 §6: the blower (19) and the
-//! hair-hair penalty (20) through a uniform grid over edges. The grid is
-//! built from the positions at the start of the step and only read while
-//! strands are advanced in parallel (gathered, never scattered), so the
-//! result does not depend on the thread count.
+//! hair-hair penalty (20) through a uniform grid over the vertices, which
+//! every edge walks. The sums are found from the positions at the start of
+//! the step, in parallel and then added in edge order, and only read while
+//! strands are advanced in parallel, so the result does not depend on the
+//! thread count.
 
 use super::math::{cross, dot, is_finite3, length, scale, sub, V3};
 use super::Blower;
@@ -37,67 +38,96 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
     )
 }
 
-/// An edge in one cell.
+/// A vertex in one cell its `2r` box touches, with its position (so an
+/// edge scanning the cell reads entries in order, not positions at
+/// random).
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
-    /// The cell, packed by [`pack`].
+    position: V3,
+    /// The next vertex's position (the end of the vertex's edge, when
+    /// `key` has [`EDGE`]).
+    next: V3,
+    /// Global index of the vertex.
+    vertex: u32,
+    /// The cell, packed by [`pack`], with the flags [`HOME`] and [`EDGE`].
     key: u32,
-    /// Global index of the edge's first vertex.
-    edge: u32,
-    strand: u32,
 }
 
-/// Edges generated per chunk of this many vertices: fixed, so the grid's
-/// order does not depend on the thread count.
+/// An entry as an edge's scan reads it: the vertex's position and the
+/// key (half the bytes of an [`Entry`]: the scan is bound by memory).
+#[derive(Debug, Clone, Copy, Default)]
+struct Probe {
+    position: V3,
+    key: u32,
+}
+
+/// A push an edge found: the vertex, the edge (its first vertex) and the
+/// push of (20), before `alpha dt`.
+type Pair = (u32, u32, V3);
+
+/// The key bit of a vertex's first entry (its box's lowest cell), where
+/// the edge starting at the vertex is searched: edges then go in cell
+/// order, so the cells a run of them walks are the same few in memory.
+const HOME: u32 = 1 << 31;
+/// The key bit of a vertex that starts a finite edge of its strand.
+const EDGE: u32 = 1 << 30;
+/// The cell bits of a key.
+const CELL: u32 = EDGE - 1;
+
+/// Entries placed per chunk of this many vertices: fixed, so the order
+/// does not depend on the thread count.
 const CHUNK_VERTICES: usize = 2048;
+/// Sorted entries whose edges are searched together.
+const CHUNK_ENTRIES: usize = 4096;
 /// Cells an edge may cross in the grid; a longer edge (a strand torn far
-/// beyond its rest length) goes on the long-edge list, which every vertex
-/// checks.
+/// beyond its rest length) tests every vertex instead.
 const MAX_CELLS_PER_EDGE: usize = 96;
-/// Long edges above which the cells are doubled (and the edges sorted
-/// again), so the list stays short.
+/// Long edges above which the cells are doubled, so few edges test every
+/// vertex.
 const MAX_LONG_EDGES: usize = 64;
-/// Cell entries at most this many per edge on average: the smallest cell
-/// is the edges' mean extent over this (less one), so the grid's memory
-/// is a bounded multiple of the edge count however dense or torn the hair
-/// is (and reserved once, so a step does not allocate as hair stretches).
-const MAX_ENTRIES_PER_EDGE: f64 = 6.0;
-/// Entries reserved per edge of a chunk: the mean bound, the cells an
-/// edge's ends add, and room for a chunk above the mean.
-const RESERVED_ENTRIES_PER_EDGE: usize = 12;
+/// Entries reserved per vertex: a box of `2r` in cells of at least `2r`
+/// touches at most two cells per axis.
+const MAX_ENTRIES_PER_VERTEX: usize = 8;
+/// Pushes a chunk of entries keeps for the sum; when a chunk finds more
+/// (a dense tangle), the sums are found edge by edge in order instead,
+/// so the memory is bounded whatever the hair does.
+const PAIRS_PER_CHUNK: usize = 4 * CHUNK_ENTRIES;
 /// The largest cell is the longest rest edge over this: an edge stretched
 /// in the step crosses more cells, it does not make cells bigger.
 const CELLS_PER_REST_EDGE: f32 = 1.5;
 /// Cell sizes the cost model tries, geometric between the bounds.
 const CELL_CANDIDATES: usize = 24;
-/// The cost of scanning one entry over that of listing one in its cell
-/// (walked to, written and moved twice by the sort): 0.1 and 0.01 measured
-/// alike at 10k strands, 0.3 and 1 slower (too many small cells).
-const SCAN_COST: f64 = 0.1;
+/// The cost of an edge walking into one cell (a bucket looked up) over
+/// that of placing one vertex entry (written and moved twice by the
+/// sort).
+const WALK_COST: f64 = 1.0;
+/// The cost of scanning one entry over that of placing one.
+const SCAN_COST: f64 = 0.05;
 
 /// The hair-hair penalty (20) of every vertex, found once per step
-/// through a uniform grid over the edges.
+/// through a uniform grid over the vertices.
 ///
-/// Each edge sits in every cell its segment passes through (not its box,
-/// not grown by `2r`), each vertex in its own cell; a vertex scans the few
-/// cells its `2r` ball touches, so only edges that pass nearby. Vertices
-/// are visited in cell order, not strand order, so the cells a run of
-/// vertices scans are the same few in memory.
+/// Each vertex sits in every cell its `2r` box touches (one, sometimes
+/// two to eight: cells are at least `2r`), with a copy of its position;
+/// each edge walks the cells its segment passes through and tests the
+/// vertices there, so only vertices that lie nearby. The entries are few
+/// (about one per vertex) and an edge's scan reads them in order.
 ///
-/// The cell size only changes the cost, never a sum: a vertex gathers the
-/// pushes of the edges it finds and adds them in edge order, each edge
-/// once, which is exactly the brute-force sum over all edges of other
-/// strands. So the size can follow the hair: between `2r` (and the
-/// memory bound [`MAX_ENTRIES_PER_EDGE`]) and the longest rest edge, the
-/// one a cost model fitted to the last step's scan finds cheapest (few
-/// entries per edge for sparse guides, small cells for dense hair, where
-/// a big cell holds hundreds of edges a vertex must test).
+/// The cell size only changes the cost, never a sum: an edge's pushes
+/// are kept per vertex once (a vertex met in several cells pushes the
+/// same each time), and every vertex's pushes are added in edge order,
+/// which is exactly the brute-force sum over all edges of other strands.
+/// So the size can follow the hair: between `2r` and the longest rest
+/// edge, the one a cost model fitted to the last step's scan finds
+/// cheapest (large cells for sparse guides, small cells for dense hair,
+/// where a big cell holds hundreds of vertices an edge must test).
 ///
-/// Entries are generated in parallel in fixed chunks, counting-sorted into
-/// buckets by cell (a spatial wrap-around index); the sums are computed in
-/// parallel in fixed chunks of the sorted vertices, so the result is the
-/// same for any thread count. The step then only reads a vertex's sum.
-/// All buffers are kept from step to step (no allocation once warm).
+/// Entries are generated in parallel in fixed chunks and counting-sorted
+/// into buckets by cell (a spatial wrap-around index); the pushes are
+/// found in parallel in fixed chunks of edges, then added in chunk order,
+/// so the result is the same for any thread count. The step then only
+/// reads a vertex's sum. All buffers are kept from step to step (no
+/// allocation once warm).
 #[derive(Debug, Default)]
 pub struct EdgeGrid {
     inv_cell: f32,
@@ -105,23 +135,24 @@ pub struct EdgeGrid {
     axis_bits: u32,
     starts: Vec<u32>,
     entries: Vec<Entry>,
-    /// Per chunk of vertices, its edges' entries in order.
+    /// `entries` as the scan reads them.
+    probes: Vec<Probe>,
+    /// Per chunk of vertices, their entries in order.
     chunks: Vec<Vec<Entry>>,
-    /// Per chunk of vertices, its edges that cross too many cells.
-    chunk_long_edges: Vec<Vec<u32>>,
-    /// Those edges of all chunks, in order.
-    long_edges: Vec<u32>,
     /// Strand of each vertex of an active strand, `u32::MAX` otherwise.
     owner: Vec<u32>,
-    /// The vertices of active strands, sorted by bucket like `entries`.
-    vertex_starts: Vec<u32>,
-    vertices: Vec<Entry>,
-    /// Per chunk of sorted vertices: the pushes a vertex found (edge,
-    /// push), and how many entries the chunk scanned.
-    found: Vec<Vec<(u32, V3)>>,
+    /// Per chunk of sorted entries: the pushes its edges found, whether it
+    /// found too many, the entries scanned.
+    pairs: Vec<Vec<Pair>>,
+    overflow: Vec<bool>,
     scanned: Vec<u64>,
-    /// Sums in the order of `vertices`, then by vertex index.
-    sorted_sums: Vec<V3>,
+    /// Every push found, sorted by vertex then edge for the sums.
+    all_pairs: Vec<Pair>,
+    /// Pushes a chunk may find before the sums go edge by edge (0: half
+    /// of [`PAIRS_PER_CHUNK`]; tests lower it).
+    max_pairs: usize,
+    /// Edges that crossed too many cells in the last build.
+    long_edges: usize,
     sums: Vec<V3>,
     scratch: SortScratch,
     /// The last build's cell and scan, for the next cell size.
@@ -139,20 +170,24 @@ struct Measured {
 /// The cell size of a step: edges of mean extent `mean_extent` (sum of
 /// the absolute coordinate differences, m), interaction reach `reach`,
 /// longest rest edge `rest_longest`. Without a last build, the largest
-/// cell (a few entries per edge). Otherwise the candidate minimising
-/// entries per edge `1 + mean / c` plus entries scanned per vertex, which
-/// grows as `(c + mean) (c + 2 reach)^3 / c` (the edges per cell times
-/// the cells a `2 reach` box touches), scaled to what the last build
-/// scanned at its cell size.
+/// cell. Otherwise the candidate minimising, per vertex, the entries
+/// placed `(1 + 2 reach / c)^3`, the cells an edge walks `1 + mean / c`
+/// and the entries scanned, which grows as `(c + mean) (c + 2 reach)^3 / c`
+/// (the edges through a cell times the entries of the vertices a cell
+/// holds), scaled to what the last build scanned at its cell size.
 fn cell_size(reach: f32, rest_longest: f32, mean_extent: f64, last: Option<Measured>) -> f32 {
     let reach = f64::from(reach);
-    let lo = reach.max(mean_extent / (MAX_ENTRIES_PER_EDGE - 1.0));
+    let lo = 2.0 * reach;
     let hi = lo.max(f64::from(rest_longest / CELLS_PER_REST_EDGE));
     let scan_shape = |c: f64| (c + mean_extent) * (c + 2.0 * reach).powi(3) / c;
     let chosen = match last {
         Some(last) if last.scanned > 0.0 && hi > lo => {
             let scale = last.scanned / scan_shape(last.cell);
-            let cost = |c: f64| 1.0 + mean_extent / c + SCAN_COST * scale * scan_shape(c);
+            let cost = |c: f64| {
+                (1.0 + 2.0 * reach / c).powi(3)
+                    + WALK_COST * (1.0 + mean_extent / c)
+                    + SCAN_COST * scale * scan_shape(c)
+            };
             let ratio = (hi / lo).powf(1.0 / (CELL_CANDIDATES - 1) as f64);
             let mut best = (lo, cost(lo));
             let mut c = lo;
@@ -214,17 +249,22 @@ fn bucket_of(cell: [i32; 3], bits: u32) -> usize {
         | (cell[2] as usize & m)
 }
 
+/// The cell walls between cells `from` and `to`.
+#[inline]
+fn crossings(from: [i32; 3], to: [i32; 3]) -> i64 {
+    (0..3)
+        .map(|c| (i64::from(to[c]) - i64::from(from[c])).abs())
+        .sum()
+}
+
 /// The cells segment `a`-`b` passes through, walked from `a` to `b`
 /// (Amanatides and Woo 1987), without repeats (hand-written: the walk is
-/// a dozen lines and the hot loop of the grid's build). `None` when there are more
+/// a dozen lines and the hot loop of the search). `None` when there are more
 /// than `MAX_CELLS_PER_EDGE`.
 fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) -> Option<usize> {
     let mut at = cell_of(a, inv_cell);
     let end = cell_of(b, inv_cell);
-    let crossings: i64 = (0..3)
-        .map(|c| (i64::from(end[c]) - i64::from(at[c])).abs())
-        .sum();
-    if crossings >= MAX_CELLS_PER_EDGE as i64 {
+    if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
         return None;
     }
     let mut step = [0i32; 3];
@@ -412,19 +452,23 @@ impl EdgeGrid {
         self.find_owners(positions.len(), offsets, active);
         let mean_extent = self.mean_edge_extent(positions);
         let mut cell = cell_size(reach, rest_longest, mean_extent, self.last);
-        let chunk_count = positions.len().div_ceil(CHUNK_VERTICES);
         // Torn strands: bigger cells until few edges are left over.
-        while self.generate_entries(positions, chunk_count, 1.0 / cell) > MAX_LONG_EDGES
-            && cell < f32::MAX / 4.0
-        {
+        loop {
+            self.long_edges = self.count_long_edges(positions, 1.0 / cell);
+            if self.long_edges <= MAX_LONG_EDGES || cell >= f32::MAX / 4.0 {
+                break;
+            }
             cell *= 2.0;
         }
         self.inv_cell = 1.0 / cell;
-        self.sort_entries(positions, chunk_count);
-        let scanned = self.sum_pushes(positions, reach);
+        let chunk_count = positions.len().div_ceil(CHUNK_VERTICES);
+        self.place_vertices(positions, chunk_count, reach);
+        let scanned = self.find_pushes(positions, reach);
+        self.sum_pushes(positions, reach);
+        let placed = self.owner.iter().filter(|&&o| o != u32::MAX).count();
         self.last = Some(Measured {
             cell: f64::from(cell),
-            scanned: scanned as f64 / self.vertices.len().max(1) as f64,
+            scanned: scanned as f64 / placed.max(1) as f64,
         });
     }
 
@@ -475,59 +519,76 @@ impl EdgeGrid {
         }
     }
 
-    /// Each chunk's edges into the cells they cross; returns how many
-    /// edges cross too many (kept on the long-edge list).
-    fn generate_entries(&mut self, positions: &[V3], chunk_count: usize, inv_cell: f32) -> usize {
+    /// The finite edges that cross too many cells of size `1 / inv_cell`.
+    fn count_long_edges(&self, positions: &[V3], inv_cell: f32) -> usize {
+        use rayon::prelude::*;
+        let owner = &self.owner;
+        (0..positions.len().saturating_sub(1))
+            .into_par_iter()
+            .with_min_len(CHUNK_VERTICES)
+            .filter(|&v| {
+                let (a, b) = (positions[v], positions[v + 1]);
+                Self::edge_strand(owner, v).is_some()
+                    && is_finite3(a)
+                    && is_finite3(b)
+                    && crossings(cell_of(a, inv_cell), cell_of(b, inv_cell))
+                        >= MAX_CELLS_PER_EDGE as i64
+            })
+            .count()
+    }
+
+    /// Each vertex of an active strand into the cells its `reach` box
+    /// touches, counting-sorted by bucket.
+    fn place_vertices(&mut self, positions: &[V3], chunk_count: usize, reach: f32) {
         use rayon::prelude::*;
         if self.chunks.len() < chunk_count {
             self.chunks.resize_with(chunk_count, Vec::new);
         }
-        if self.chunk_long_edges.len() < chunk_count {
-            self.chunk_long_edges.resize_with(chunk_count, Vec::new);
-        }
-        let owner = &self.owner;
+        let (owner, inv_cell) = (&self.owner, self.inv_cell);
         self.chunks[..chunk_count]
             .par_iter_mut()
-            .zip(self.chunk_long_edges[..chunk_count].par_iter_mut())
             .enumerate()
-            .for_each(|(k, (out, long))| {
+            .for_each(|(k, out)| {
                 out.clear();
                 if out.capacity() == 0 {
-                    out.reserve(CHUNK_VERTICES * RESERVED_ENTRIES_PER_EDGE);
-                    long.reserve(MAX_LONG_EDGES);
+                    out.reserve(CHUNK_VERTICES * MAX_ENTRIES_PER_VERTEX);
                 }
-                long.clear();
-                let mut cells = [0u32; MAX_CELLS_PER_EDGE];
                 let first = k * CHUNK_VERTICES;
                 for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
-                    let Some(strand) = Self::edge_strand(owner, v) else {
-                        continue;
-                    };
-                    let (a, b) = (positions[v], positions[v + 1]);
-                    if !(is_finite3(a) && is_finite3(b)) {
+                    let p = positions[v];
+                    if owner[v] == u32::MAX || !is_finite3(p) {
                         continue;
                     }
-                    match edge_cells(a, b, inv_cell, &mut cells) {
-                        Some(n) => out.extend(cells[..n].iter().map(|&key| Entry {
-                            key,
-                            edge: v as u32,
-                            strand,
-                        })),
-                        None => long.push(v as u32),
+                    let next = positions.get(v + 1).copied().unwrap_or_default();
+                    let edge = if Self::edge_strand(owner, v).is_some() && is_finite3(next) {
+                        EDGE
+                    } else {
+                        0
+                    };
+                    let lo = cell_of([p[0] - reach, p[1] - reach, p[2] - reach], inv_cell);
+                    let hi = cell_of([p[0] + reach, p[1] + reach, p[2] + reach], inv_cell);
+                    // More than 2 cells per axis only at far-off
+                    // (saturated) coordinates: then the home cell only.
+                    let hi = if (0..3).all(|c| i64::from(hi[c]) - i64::from(lo[c]) <= 1) {
+                        hi
+                    } else {
+                        lo
+                    };
+                    for x in lo[0]..=hi[0] {
+                        for y in lo[1]..=hi[1] {
+                            for z in lo[2]..=hi[2] {
+                                let home = if [x, y, z] == lo { HOME | edge } else { 0 };
+                                out.push(Entry {
+                                    position: p,
+                                    next,
+                                    vertex: v as u32,
+                                    key: pack([x, y, z]) | home,
+                                });
+                            }
+                        }
                     }
                 }
             });
-        self.long_edges.clear();
-        self.long_edges.reserve(2 * MAX_LONG_EDGES);
-        for long in &self.chunk_long_edges[..chunk_count] {
-            self.long_edges.extend_from_slice(long);
-        }
-        self.long_edges.len()
-    }
-
-    /// The entries, then the vertices, counting-sorted by bucket.
-    fn sort_entries(&mut self, positions: &[V3], chunk_count: usize) {
-        use rayon::prelude::*;
         let total: usize = self.chunks[..chunk_count].iter().map(Vec::len).sum();
         self.axis_bits = bucket_bits(total);
         sort_into_buckets(
@@ -537,76 +598,113 @@ impl EdgeGrid {
             &mut self.starts,
             &mut self.entries,
         );
-        let (owner, inv_cell) = (&self.owner, self.inv_cell);
-        self.chunks[..chunk_count]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, out)| {
-                out.clear();
-                let first = k * CHUNK_VERTICES;
-                for v in first..(first + CHUNK_VERTICES).min(positions.len()) {
-                    let p = positions[v];
-                    if owner[v] != u32::MAX && is_finite3(p) {
-                        out.push(Entry {
-                            key: pack(cell_of(p, inv_cell)),
-                            edge: v as u32,
-                            strand: owner[v],
-                        });
-                    }
+        self.probes.clear();
+        self.probes.reserve(self.entries.capacity());
+        self.probes.resize(self.entries.len(), Probe::default());
+        self.probes
+            .par_chunks_mut(CHUNK_ENTRIES)
+            .zip(self.entries.par_chunks(CHUNK_ENTRIES))
+            .for_each(|(probes, entries)| {
+                for (probe, e) in probes.iter_mut().zip(entries) {
+                    *probe = Probe {
+                        position: e.position,
+                        key: e.key & CELL,
+                    };
                 }
             });
-        // The vertices' order only needs to be local: their own (fewer)
-        // buckets.
-        sort_into_buckets(
-            &self.chunks[..chunk_count],
-            bucket_bits(self.owner.len()),
-            &mut self.scratch,
-            &mut self.vertex_starts,
-            &mut self.vertices,
-        );
     }
 
-    /// Every vertex's penalty sum, in parallel over fixed chunks of the
-    /// sorted vertices; returns the entries scanned.
-    fn sum_pushes(&mut self, positions: &[V3], reach: f32) -> u64 {
-        use rayon::prelude::*;
-        let count = self.vertices.len();
-        let chunk_count = count.div_ceil(CHUNK_VERTICES);
-        if self.found.len() < chunk_count {
-            // Room for a dense tangle's pushes, so a warm step does not grow them.
-            self.found
-                .resize_with(chunk_count, || Vec::with_capacity(256));
-        }
-        self.scanned.clear();
-        self.scanned.resize(chunk_count, 0);
-        self.sorted_sums.clear();
-        self.sorted_sums.resize(count, [0.0; 3]);
-        let lookup = Lookup {
+    /// The sorted grid, read by every edge's search.
+    fn lookup<'a>(&'a self, positions: &'a [V3], reach: f32) -> Lookup<'a> {
+        Lookup {
             entries: &self.entries,
+            probes: &self.probes,
             starts: &self.starts,
-            long_edges: &self.long_edges,
             owner: &self.owner,
             positions,
             inv_cell: self.inv_cell,
             bits: self.axis_bits,
             reach,
+        }
+    }
+
+    /// Every edge's pushes, in parallel over fixed chunks of the sorted
+    /// entries (each edge at its first vertex's home entry); returns the
+    /// entries scanned.
+    fn find_pushes(&mut self, positions: &[V3], reach: f32) -> u64 {
+        use rayon::prelude::*;
+        let chunk_count = self.entries.len().div_ceil(CHUNK_ENTRIES);
+        let mut pairs = std::mem::take(&mut self.pairs);
+        let mut overflow = std::mem::take(&mut self.overflow);
+        let mut scanned = std::mem::take(&mut self.scanned);
+        if pairs.len() < chunk_count {
+            pairs.resize_with(chunk_count, || Vec::with_capacity(PAIRS_PER_CHUNK));
+        }
+        overflow.clear();
+        overflow.resize(chunk_count, false);
+        scanned.clear();
+        scanned.resize(chunk_count, 0);
+        let max_pairs = match self.max_pairs {
+            0 => PAIRS_PER_CHUNK / 2,
+            n => n,
         };
-        self.sorted_sums
-            .par_chunks_mut(CHUNK_VERTICES)
-            .zip(self.vertices.par_chunks(CHUNK_VERTICES))
-            .zip(self.found[..chunk_count].par_iter_mut())
-            .zip(self.scanned.par_iter_mut())
-            .for_each(|(((sums, vertices), found), scanned)| {
-                for (sum, v) in sums.iter_mut().zip(vertices) {
-                    *sum = lookup.penalty_sum(positions[v.edge as usize], v.strand, found, scanned);
+        let lookup = self.lookup(positions, reach);
+        self.entries
+            .par_chunks(CHUNK_ENTRIES)
+            .zip(pairs[..chunk_count].par_iter_mut())
+            .zip(overflow.par_iter_mut())
+            .zip(scanned.par_iter_mut())
+            .for_each(|(((entries, pairs), overflow), scanned)| {
+                pairs.clear();
+                for e in entries
+                    .iter()
+                    .filter(|e| e.key & (HOME | EDGE) == HOME | EDGE)
+                {
+                    if pairs.len() >= max_pairs {
+                        *overflow = true;
+                        break;
+                    }
+                    lookup.pushes_of(e.vertex as usize, e.position, e.next, pairs, scanned);
                 }
             });
-        self.sums.clear();
-        self.sums.resize(positions.len(), [0.0; 3]);
-        for (v, sum) in self.vertices.iter().zip(&self.sorted_sums) {
-            self.sums[v.edge as usize] = *sum;
+        let total = scanned.iter().sum();
+        (self.pairs, self.overflow, self.scanned) = (pairs, overflow, scanned);
+        total
+    }
+
+    /// Every vertex's sum of its pushes in edge order: sorted, or (when a
+    /// chunk found too many) edge by edge.
+    fn sum_pushes(&mut self, positions: &[V3], reach: f32) {
+        let chunk_count = self.entries.len().div_ceil(CHUNK_ENTRIES);
+        let mut sums = std::mem::take(&mut self.sums);
+        let mut all = std::mem::take(&mut self.all_pairs);
+        sums.clear();
+        sums.resize(positions.len(), [0.0; 3]);
+        all.clear();
+        if all.capacity() == 0 {
+            // Room for a dense tangle's pushes, so a warm step does not grow them.
+            all.reserve(positions.len() / 4 + 1024);
         }
-        self.scanned.iter().sum()
+        if self.overflow.iter().any(|&o| o) {
+            let lookup = self.lookup(positions, reach);
+            let mut scanned = 0;
+            for edge in 0..positions.len() {
+                all.clear();
+                lookup.edge_pushes(edge, &mut all, &mut scanned);
+                add_pushes(&mut sums, &all);
+            }
+        } else {
+            for pairs in &self.pairs[..chunk_count] {
+                all.extend_from_slice(pairs);
+            }
+            // Unique keys (an edge keeps a vertex once): any sort gives
+            // the same order.
+            all.sort_unstable_by_key(|&(v, edge, _)| (v, edge));
+            add_pushes(&mut sums, &all);
+        }
+        all.clear();
+        self.sums = sums;
+        self.all_pairs = all;
     }
 
     /// The penalty velocity change (20) at vertex `vertex` (global index)
@@ -617,6 +715,14 @@ impl EdgeGrid {
             Some(sum) => scale(*sum, alpha * dt),
             None => [0.0; 3],
         }
+    }
+}
+
+/// Adds each push to its vertex's sum, in the order given.
+fn add_pushes(sums: &mut [V3], pairs: &[Pair]) {
+    for &(v, _, push) in pairs {
+        let s = &mut sums[v as usize];
+        *s = [s[0] + push[0], s[1] + push[1], s[2] + push[2]];
     }
 }
 
@@ -643,11 +749,40 @@ fn edge_push(p: V3, a: V3, b: V3, reach: f32) -> Option<V3> {
     Some([d[0] * k, d[1] * k, d[2] * k])
 }
 
-/// The sorted grid, read by every vertex's sum.
+/// A cheap first test of [`edge_push`]: the distance to the edge's line
+/// (never more than to the segment), without a division.
+struct NearLine {
+    a: V3,
+    ab: V3,
+    /// `reach^2 |ab|^2` with 1 % to spare for round-off (the squared
+    /// distance is off by about 1e-5 of itself at `reach`).
+    limit: f32,
+}
+
+impl NearLine {
+    #[inline]
+    fn new(a: V3, b: V3, reach: f32) -> Self {
+        let ab = sub(b, a);
+        NearLine {
+            a,
+            ab,
+            limit: reach * reach * dot(ab, ab) * 1.01,
+        }
+    }
+
+    /// False only when `p` is beyond the reach of the segment.
+    #[inline]
+    fn may_reach(&self, p: V3) -> bool {
+        let c = cross(sub(p, self.a), self.ab);
+        dot(c, c) <= self.limit
+    }
+}
+
+/// The sorted grid, read by every edge's search.
 struct Lookup<'a> {
     entries: &'a [Entry],
+    probes: &'a [Probe],
     starts: &'a [u32],
-    long_edges: &'a [u32],
     owner: &'a [u32],
     positions: &'a [V3],
     inv_cell: f32,
@@ -656,64 +791,75 @@ struct Lookup<'a> {
 }
 
 impl Lookup<'_> {
-    /// The sum of [`edge_push`] over the edges of other strands within
-    /// `reach` of `p`, each once, in edge order (so the sum does not
-    /// depend on the cells); `found` is scratch, `scanned` counts the
-    /// entries looked at.
-    fn penalty_sum(&self, p: V3, strand: u32, found: &mut Vec<(u32, V3)>, scanned: &mut u64) -> V3 {
+    /// Appends to `out` the [`edge_push`] of the edge starting at vertex
+    /// `edge` on every vertex of another strand within `reach`, each once; `scanned` counts the entries looked at.
+    fn edge_pushes(&self, edge: usize, out: &mut Vec<Pair>, scanned: &mut u64) {
+        if EdgeGrid::edge_strand(self.owner, edge).is_none() {
+            return;
+        }
+        let (a, b) = (self.positions[edge], self.positions[edge + 1]);
+        if is_finite3(a) && is_finite3(b) {
+            self.pushes_of(edge, a, b, out, scanned);
+        }
+    }
+
+    /// [`Self::edge_pushes`] of a finite edge of an active strand, from
+    /// `a` to `b`.
+    fn pushes_of(&self, edge: usize, a: V3, b: V3, out: &mut Vec<Pair>, scanned: &mut u64) {
+        // The strand is looked up on a hit only (a load at random).
+        let strand = || self.owner[edge];
         let reach = self.reach;
-        found.clear();
-        let lo = cell_of([p[0] - reach, p[1] - reach, p[2] - reach], self.inv_cell);
-        let hi = cell_of([p[0] + reach, p[1] + reach, p[2] + reach], self.inv_cell);
-        // More than 3 cells per axis only at far-off (saturated) coordinates.
-        if (0..3).all(|c| i64::from(hi[c]) - i64::from(lo[c]) <= 2) {
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        let here = [x, y, z];
-                        let key = pack(here);
-                        let bucket = bucket_of(here, self.bits);
-                        let (start, end) = (
-                            self.starts[bucket] as usize,
-                            self.starts[bucket + 1] as usize,
-                        );
-                        *scanned += (end - start) as u64;
-                        for e in &self.entries[start..end] {
-                            if e.key != key || e.strand == strand {
-                                continue;
+        let first = out.len();
+        let near = NearLine::new(a, b, reach);
+        let mut cells = [0u32; MAX_CELLS_PER_EDGE];
+        match edge_cells(a, b, self.inv_cell, &mut cells) {
+            Some(n) => {
+                for &key in &cells[..n] {
+                    let bucket = bucket_of(unpack(key), self.bits);
+                    let (start, end) = (
+                        self.starts[bucket] as usize,
+                        self.starts[bucket + 1] as usize,
+                    );
+                    *scanned += (end - start) as u64;
+                    for (i, e) in self.probes[start..end].iter().enumerate() {
+                        if e.key != key || !near.may_reach(e.position) {
+                            continue;
+                        }
+                        if let Some(push) = edge_push(e.position, a, b, reach) {
+                            let vertex = self.entries[start + i].vertex;
+                            if self.owner[vertex as usize] != strand() {
+                                out.push((vertex, edge as u32, push));
                             }
-                            self.push_from(p, e.edge, found);
                         }
                     }
                 }
+                // A vertex met in several cells pushes the same each
+                // time: once.
+                if out.len() - first > 1 {
+                    out[first..].sort_unstable_by_key(|&(v, _, _)| v);
+                    let mut kept = first + 1;
+                    for i in first + 1..out.len() {
+                        if out[i].0 != out[kept - 1].0 {
+                            out[kept] = out[i];
+                            kept += 1;
+                        }
+                    }
+                    out.truncate(kept);
+                }
             }
-        }
-        for &edge in self.long_edges {
-            if self.owner[edge as usize] != strand {
-                self.push_from(p, edge, found);
+            None => {
+                // Too long to walk: every vertex of another active strand.
+                let strand = strand();
+                *scanned += self.positions.len() as u64;
+                for (v, (&p, &owner)) in self.positions.iter().zip(self.owner).enumerate() {
+                    if owner == u32::MAX || owner == strand {
+                        continue;
+                    }
+                    if let Some(push) = edge_push(p, a, b, reach) {
+                        out.push((v as u32, edge as u32, push));
+                    }
+                }
             }
-        }
-        // An edge met in several cells pushes the same each time: once.
-        found.sort_unstable_by_key(|&(edge, _)| edge);
-        let mut dv = [0.0f32; 3];
-        let mut previous = None;
-        for &(edge, push) in found.iter() {
-            if previous != Some(edge) {
-                dv = [dv[0] + push[0], dv[1] + push[1], dv[2] + push[2]];
-                previous = Some(edge);
-            }
-        }
-        dv
-    }
-
-    #[inline]
-    fn push_from(&self, p: V3, edge: u32, found: &mut Vec<(u32, V3)>) {
-        let (a, b) = (
-            self.positions[edge as usize],
-            self.positions[edge as usize + 1],
-        );
-        if let Some(push) = edge_push(p, a, b, self.reach) {
-            found.push((edge, push));
         }
     }
 }
@@ -852,15 +998,15 @@ mod tests {
         let (mut positions, offsets) = tangle(60, 12);
         // Over-stretched edges: a vertex pulled 2 cm off (an edge crossing
         // many cells), and one pulled half a metre off through the tangle
-        // (too many cells: the long-edge list).
+        // (too many cells: it tests every vertex).
         positions[offsets[3] + 5][1] += 0.02;
         positions[offsets[7] + 4] = [0.5, 0.002, 0.002];
         let active: Vec<bool> = (0..60).map(|s| s % 11 != 5).collect();
         let (touching, grid) = check_against_brute_force(&positions, &offsets, &active, 0.003);
         // The test means something only if vertices touched other strands
-        // and the torn edges were on the long list.
+        // and a torn edge was too long to walk.
         assert!(touching > 30, "{touching}");
-        assert!(!grid.long_edges.is_empty());
+        assert!(grid.long_edges > 0);
         assert!(1.0 / grid.inv_cell < 0.003);
     }
 
@@ -872,7 +1018,7 @@ mod tests {
         }
         let (touching, grid) = check_against_brute_force(&positions, &offsets, &[true; 200], 0.003);
         assert!(touching > 30, "{touching}");
-        assert!(grid.long_edges.len() <= MAX_LONG_EDGES);
+        assert!(grid.long_edges <= MAX_LONG_EDGES);
     }
 
     #[test]
@@ -899,5 +1045,66 @@ mod tests {
         assert!(one.iter().any(|b| *b != 0));
         assert_eq!(one, run(2));
         assert_eq!(one, run(3));
+    }
+
+    #[test]
+    fn a_moving_tangle_matches_brute_force_every_step_on_any_thread_count() {
+        let (mut positions, offsets) = tangle(150, 12);
+        let active = vec![true; 150];
+        let radius = 1e-4;
+        let mut grids: Vec<EdgeGrid> = (0..2).map(|_| EdgeGrid::default()).collect();
+        let mut pushed = 0;
+        for step in 0..6 {
+            // Each strand drifts its own way: cells, home entries and
+            // the cost model's cell size change from step to step.
+            for (s, w) in offsets.windows(2).enumerate() {
+                for p in &mut positions[w[0]..w[1]] {
+                    let phase = (s * 7 + step) as f32;
+                    p[0] += 3e-4 * phase.sin();
+                    p[1] += 2e-4 * phase.cos();
+                }
+            }
+            for (threads, grid) in [1, 2].into_iter().zip(&mut grids) {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| grid.build(&positions, &offsets, &active, radius, 0.003));
+                for v in 0..positions.len() {
+                    let expected = brute_force(&positions, &offsets, &active, v, radius);
+                    let got = grid.penalty_dv(v, 1.0, 1.0);
+                    assert_eq!(
+                        got.map(f32::to_bits),
+                        expected.map(f32::to_bits),
+                        "step {step}, {threads} thread(s), vertex {v}"
+                    );
+                    pushed += usize::from(expected != [0.0; 3]);
+                }
+            }
+        }
+        assert!(pushed > 100, "{pushed}");
+    }
+
+    #[test]
+    fn a_tangle_with_too_many_pushes_sums_edge_by_edge_to_the_same_bits() {
+        let (positions, offsets) = tangle(60, 12);
+        let active = vec![true; 60];
+        let mut grid = EdgeGrid {
+            max_pairs: 1,
+            ..EdgeGrid::default()
+        };
+        let (touching, _) = check_against_brute_force(&positions, &offsets, &active, 0.003);
+        grid.build(&positions, &offsets, &active, 1e-4, 0.003);
+        // The bounded path was taken, and it sums what brute force does.
+        assert!(grid.overflow.iter().any(|&o| o));
+        assert!(touching > 30, "{touching}");
+        for v in 0..positions.len() {
+            let expected = brute_force(&positions, &offsets, &active, v, 1e-4);
+            assert_eq!(
+                grid.penalty_dv(v, 1.0, 1.0).map(f32::to_bits),
+                expected.map(f32::to_bits),
+                "vertex {v}"
+            );
+        }
     }
 }
