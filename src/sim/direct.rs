@@ -30,11 +30,20 @@ use super::lanes::Real;
 use super::math::{Quat, V3};
 
 /// The largest frame rotation one iteration applies, radians: a trust
-/// region for the linearisation. At 0.5 a perm rod's moving targets left
-/// the frames lagging at dt 1/360 (the set came out at a quarter of its
-/// size); 0.1 follows them and is far above a frame's turn per iteration in
-/// free motion.
-const MAX_TURN: f64 = 0.1;
+/// region for the linearisation, so a frame whose target jumps (a perm
+/// rod's moving targets) gets there over several iterations instead of
+/// overshooting. The clamp applies to the frames only (the positions take
+/// the full Newton step), so a frame it holds back lags its edge, and the
+/// stiff stretch/shear then pulls the edge after the frame. Hair whipping
+/// onto the head turns its tip edges by about a radian in a step: at 0.1
+/// the frames needed five steps to catch up while the edges, their
+/// touching ends held along the contact normal, stretched (24 cm hair 15 %
+/// against the ball head, 11 % against the mesh head at the default two
+/// iterations; 0.04 % and 0.05 % at 0.5, the same as unclamped). 0.1 was
+/// chosen for the perm before the frames' inertia floor
+/// (`FRAME_INERTIA_SPEED` in step.rs); with the floor the perm keeps 0.67
+/// of its rod and 1.20 of its 1.88 turns at 0.1, 0.5 and 1.0 alike.
+const MAX_TURN: f64 = 0.5;
 
 /// How much of a touching vertex's inverse mass along the contact normal
 /// the solve removes: it is 100 times heavier across the surface than

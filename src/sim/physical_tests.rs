@@ -310,7 +310,7 @@ fn sag_free_start_keeps_the_bangs_and_a_scalp_where_they_were_groomed() {
             max(&sagged) * 1e3,
             median(&sagged) * 1e3,
         );
-        // The Bangs' strands 6, 32, 58 and 65 are exact equilibria that a
+        // The Bangs' strands 0, 4, 6, 32, 58 and 65 are exact equilibria that a
         // lone 40 um hair cannot hold (sag_free.rs): the probe names them
         // and the settle shows it. Every strand it does not name holds.
         assert!(max(&held) < 1e-3, "{name}: an unnamed strand drifts");

@@ -437,7 +437,7 @@ fn sag_free_start_keeps_the_groom_where_it_was_authored() {
 #[test]
 fn sag_free_bake_names_the_bangs_strands_a_lone_hair_cannot_hold() {
     // hairutil's Bangs (tests/data; mm, hanging along -X) of real 40 um
-    // hair: four strands stand only as an unstable balance
+    // hair: six strands stand only as an unstable balance
     // (sim::physical_tests names them); the bake's report says so in one line.
     let dir = TestDir::new();
     let groom = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/hairutil_Bangs_100.hair");
@@ -459,7 +459,7 @@ fn sag_free_bake_names_the_bangs_strands_a_lone_hair_cannot_hold() {
     eprintln!("{named:?}");
     assert_eq!(named.len(), 1, "{named:?}");
     assert!(
-        named[0].contains("4 of 100 strands") && named[0].contains("(strands 6, 32, 58, 65)"),
+        named[0].contains("6 of 100 strands") && named[0].contains("(strands 0, 4, 6, 32, 58, 65)"),
         "{}",
         named[0]
     );
