@@ -219,16 +219,7 @@ fn pillow_pinch_strain(head: SharedShape) -> (f64, usize, f32) {
         .map(|s| s.to_vec())
         .collect();
     assert_eq!(left.len(), 6);
-    let mut groom = groom::Groom::from_strands(left);
-    groom.units = groom::Units::METERS;
-    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
-    let parameters = SolverParameters {
-        dt: 1.0 / 360.0,
-        iterations: Model::Physical.default_iterations(),
-        hair_radius: 4e-5,
-        ..SolverParameters::default()
-    };
-    let mut solver = Solver::new(parameters).unwrap();
+    let (mut set, mut solver, parameters) = real_hair_at_dt_1_360(left);
     let tilt = Rot3::from_axis_angle(Vector::Z, (-10f32).to_radians());
     let pose_at = |x: f32| Pose::from_parts(Vector::new(x, 0.0, 0.0), tilt);
     let mut colliders = ColliderSet::new();
@@ -304,6 +295,21 @@ struct Whip {
     impact_speed: f32,
 }
 
+/// `strands` (metres) as real 40 um hair, and a solver of the physical model
+/// at dt 1/360 with its default iterations, and its parameters.
+fn real_hair_at_dt_1_360(strands: Vec<Vec<[f32; 3]>>) -> (StrandSet, Solver, SolverParameters) {
+    let mut groom = groom::Groom::from_strands(strands);
+    groom.units = groom::Units::METERS;
+    let set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let parameters = SolverParameters {
+        dt: 1.0 / 360.0,
+        iterations: Model::Physical.default_iterations(),
+        hair_radius: 4e-5,
+        ..SolverParameters::default()
+    };
+    (set, Solver::new(parameters).unwrap(), parameters)
+}
+
 /// Hair whipping onto the head (issue 10, point 4), as `groombake bench`
 /// shows it: a dozen strands of the bench groom (24 cm real hair, 32
 /// vertices) start straight out of the scalp, fall under gravity and hit
@@ -312,16 +318,7 @@ struct Whip {
 fn whip(head: SharedShape, distance: HeadDistance<'_>) -> Whip {
     let scalp = bench_groom(600, 32).unwrap();
     let picked: Vec<Vec<[f32; 3]>> = scalp.strands().step_by(50).map(|s| s.to_vec()).collect();
-    let mut groom = groom::Groom::from_strands(picked);
-    groom.units = groom::Units::METERS;
-    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
-    let parameters = SolverParameters {
-        dt: 1.0 / 360.0,
-        iterations: Model::Physical.default_iterations(),
-        hair_radius: 4e-5,
-        ..SolverParameters::default()
-    };
-    let mut solver = Solver::new(parameters).unwrap();
+    let (mut set, mut solver, parameters) = real_hair_at_dt_1_360(picked);
     let mut colliders = ColliderSet::new();
     colliders.insert(Collider::new("head", head, Pose::IDENTITY, 0.3));
     let mut result = Whip {
