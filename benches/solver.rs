@@ -18,6 +18,7 @@ fn step(c: &mut Criterion) {
         vertices: 32,
         model: Model::Physical,
         iterations: Model::Physical.default_iterations(),
+        tolerance: Model::Physical.default_tolerance(),
         hair_hair: None,
         volumetric: None,
         collider: HeadCollider::None,
@@ -31,6 +32,7 @@ fn step(c: &mut Criterion) {
             Workload {
                 model: Model::Paper,
                 iterations: 5,
+                tolerance: 0.0,
                 ..plain.clone()
             },
         ),

@@ -44,6 +44,9 @@ pub struct Workload {
     /// The elastic model (real hair's defaults for the physical one).
     pub model: Model,
     pub iterations: u32,
+    /// The physical model's Newton tolerance (`SolverParameters::tolerance`;
+    /// 0: every strand gets all `iterations`).
+    pub tolerance: f32,
     /// `alpha` of the hair-hair penalty (20); `None` leaves it off.
     pub hair_hair: Option<f32>,
     /// Volumetric hair-hair (replaces the pairwise penalty when set).
@@ -79,6 +82,7 @@ impl Workload {
             vertices: 32,
             model: Model::Physical,
             iterations: Model::Physical.default_iterations(),
+            tolerance: Model::Physical.default_tolerance(),
             hair_hair: Some(5.0),
             volumetric: None,
             collider: HeadCollider::Mesh(head),
@@ -110,6 +114,8 @@ pub struct Scene {
     pub colliders: ColliderSet,
     delivery: Option<Delivery>,
     steps: u64,
+    /// Constraint solves of all strands so far (`StepReport::solves`).
+    solves: u64,
 }
 
 /// The render hair and its animated export.
@@ -148,6 +154,11 @@ impl Workload {
                 "--strands must be at least 1 and --strands x --vertices at most 50,000,000".into(),
             ));
         }
+        if !(self.tolerance.is_finite() && (0.0..=0.01).contains(&self.tolerance)) {
+            return Err(BenchError::Input(
+                "--tolerance must be between 0 and 0.01".into(),
+            ));
+        }
         if self.render.is_some_and(|r| r == 0 || r > MAX_RENDER) {
             return Err(BenchError::Input(format!(
                 "--render must be between 1 and {MAX_RENDER}"
@@ -162,6 +173,7 @@ impl Workload {
         let groom = sim::bench_groom(self.strands, self.vertices)?;
         let solver = Solver::new(SolverParameters {
             iterations: self.iterations,
+            tolerance: self.tolerance,
             hair_hair_strength: self.hair_hair,
             volumetric: self.volumetric,
             ..SolverParameters::default()
@@ -207,6 +219,7 @@ impl Workload {
             colliders,
             delivery,
             steps: 0,
+            solves: 0,
         })
     }
 }
@@ -309,6 +322,7 @@ impl Scene {
             return Err(BenchError::NonFinite(report.contained.len()));
         }
         self.steps += 1;
+        self.solves += report.solves;
         if let Some(delivery) = self.delivery.as_mut() {
             if self.steps.is_multiple_of(delivery.every) {
                 delivery.frame(self.strands.positions())?;
@@ -330,6 +344,8 @@ impl Scene {
 pub struct Timing {
     pub steps: usize,
     pub seconds: f64,
+    /// Constraint solves of all strands in the timed steps.
+    pub solves: u64,
     /// CPU time of all threads of the process, when the platform says.
     pub cpu_seconds: Option<f64>,
     /// Of that, CPU seconds interpolating the render hair and exporting it.
@@ -371,12 +387,14 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
     }
     let steps = steps.next_multiple_of(period);
     let delivered = scene.delivery_cpu();
+    let solves_before = scene.solves;
     let cpu_start = process_cpu_ns();
     let start = Instant::now();
     for _ in 0..steps {
         scene.step()?;
     }
     let seconds = start.elapsed().as_secs_f64();
+    let solves = scene.solves - solves_before;
     let (interpolation, export) = scene.delivery_cpu();
     if let Some(writer) = scene.delivery.as_mut().and_then(|d| d.writer.take()) {
         // The file is complete, as a bake's; `Delivery`'s drop removes it.
@@ -391,6 +409,7 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
     Ok(Timing {
         steps,
         seconds,
+        solves,
         cpu_seconds,
         interpolation_seconds: interpolation - delivered.0,
         export_seconds: export - delivered.1,
@@ -430,9 +449,16 @@ impl Report {
         self.timing.seconds * 1e9 / (self.timing.steps as f64 * self.vertex_count())
     }
 
-    /// Wall nanoseconds per vertex per constraint iteration.
+    /// Constraint solves (Newton iterations, paper sweeps) a strand got
+    /// per step, on average over the timed steps.
+    pub fn solves_per_strand_step(&self) -> f64 {
+        self.timing.solves as f64 / (self.timing.steps as f64 * self.workload.strands as f64)
+    }
+
+    /// Wall nanoseconds per vertex per constraint iteration (as many as
+    /// the strands got on average).
     pub fn ns_per_vertex_iteration(&self) -> f64 {
-        self.ns_per_vertex_step() / f64::from(self.workload.iterations)
+        self.ns_per_vertex_step() / self.solves_per_strand_step().max(1.0)
     }
 
     /// Wall seconds per simulated second (steps of `dt`, with the frames
@@ -515,16 +541,28 @@ pub fn run(
     })
 }
 
-/// CPU time of every thread of this process so far, in nanoseconds (Linux
-/// `/proc/self/task/*/schedstat`); `None` elsewhere.
+/// CPU time of every thread of this process so far, in nanoseconds
+/// (`CLOCK_PROCESS_CPUTIME_ID`: it keeps the time of threads that have
+/// ended, so it never falls between two readings; summing the live
+/// threads' `/proc/self/task/*/schedstat` did when a thread pool ended in
+/// between, and a short run's CPU time came out as 0). `None` where the
+/// clock is not available.
 fn process_cpu_ns() -> Option<u64> {
-    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
-    let mut total = 0u64;
-    for task in tasks.flatten() {
-        let text = std::fs::read_to_string(task.path().join("schedstat")).ok()?;
-        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    let mut now = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `now` is a valid timespec the call writes.
+    if unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut now) } != 0 {
+        return None;
     }
-    Some(total)
+    let seconds = u64::try_from(now.tv_sec).ok()?;
+    let nanoseconds = u64::try_from(now.tv_nsec).ok()?;
+    Some(
+        seconds
+            .saturating_mul(1_000_000_000)
+            .saturating_add(nanoseconds),
+    )
 }
 
 /// Peak resident set size (`VmHWM` of `/proc/self/status`), bytes.
@@ -546,6 +584,7 @@ mod tests {
             vertices: 24,
             model: Model::Physical,
             iterations: 5,
+            tolerance: 0.0,
             hair_hair,
             volumetric: None,
             collider: HeadCollider::Mesh(
@@ -588,6 +627,7 @@ mod tests {
             vertices: 8,
             model: Model::Physical,
             iterations: 2,
+            tolerance: 0.0,
             hair_hair: None,
             volumetric: None,
             collider: HeadCollider::None,

@@ -39,10 +39,15 @@ pub struct BenchArgs {
     /// Elastic model: `physical` (real hair, direct solve) or `paper`.
     #[arg(long, default_value = "physical", value_parser = ["physical", "paper"])]
     model: String,
-    /// Constraint iterations per step (default: the model's, 2 physical,
-    /// 5 paper).
+    /// Constraint iterations per step (default: the model's, at most 2
+    /// physical, 5 paper). Given alone, every strand gets exactly this many.
     #[arg(long)]
     iterations: Option<u32>,
+    /// Physical model: a strand stops iterating once its edges are within
+    /// this fraction of their length, 0-0.01 (default 0.001 without
+    /// --iterations, 0 with it: all iterations).
+    #[arg(long, value_name = "FRACTION")]
+    tolerance: Option<f32>,
     /// Steps timed (after 10 untimed ones); by default enough for about 2 s.
     #[arg(long)]
     steps: Option<usize>,
@@ -90,6 +95,11 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         Model::Physical
     };
     let iterations = args.iterations.unwrap_or(model.default_iterations());
+    // A count given alone is the count every strand gets.
+    let tolerance = args.tolerance.unwrap_or(match args.iterations {
+        Some(_) => 0.0,
+        None => model.default_tolerance(),
+    });
     let collider = collider_of(&args.collider)?;
     let workload = match args.preset.as_deref() {
         Some(_) => {
@@ -114,6 +124,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             Workload {
                 model,
                 iterations,
+                tolerance,
                 ..Workload::full_head(head)
             }
         }
@@ -122,6 +133,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             vertices: args.vertices,
             model,
             iterations,
+            tolerance,
             hair_hair: args.hair_hair.filter(|_| args.hair_hair_mode == "pairwise"),
             volumetric: (args.hair_hair_mode == "volumetric" && args.hair_hair.is_some())
                 .then(groombake::sim::Volumetric::default),
@@ -154,6 +166,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "model": args.model,
             "threads": threads,
             "iterations": workload.iterations,
+            "tolerance": workload.tolerance,
+            "solves_per_strand_step": report.solves_per_strand_step(),
             "hair_hair": workload.hair_hair,
             "hair_hair_mode": if workload.volumetric.is_some() { "volumetric" } else { "pairwise" },
             "render": workload.render,
@@ -172,7 +186,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "cpu_ns_per_vertex_step": report.cpu_ns_per_vertex_step(),
             "cpu_ns_per_vertex_iteration": report
                 .cpu_ns_per_vertex_step()
-                .map(|c| c / f64::from(workload.iterations)),
+                .map(|c| c / report.solves_per_strand_step().max(1.0)),
             "shares": {
                 "solver": shares.solver,
                 "collisions": shares.collisions,
@@ -188,13 +202,14 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         println!("{json}");
     } else {
         println!(
-            "{} strands x {} vertices, {} model, {} iterations, {} threads: {} steps in {:.3} s, \
-             {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per vertex-iteration \
-             ({} ns of CPU time per vertex-step)",
+            "{} strands x {} vertices, {} model, {} iterations ({:.2} per strand-step), {} threads: \
+             {} steps in {:.3} s, {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per \
+             vertex-iteration ({} ns of CPU time per vertex-step)",
             workload.strands,
             workload.vertices,
             args.model,
             workload.iterations,
+            report.solves_per_strand_step(),
             threads,
             report.timing.steps,
             report.timing.seconds,

@@ -304,6 +304,7 @@ fn real_hair_at_dt_1_360(strands: Vec<Vec<[f32; 3]>>) -> (StrandSet, Solver, Sol
     let parameters = SolverParameters {
         dt: 1.0 / 360.0,
         iterations: Model::Physical.default_iterations(),
+        tolerance: Model::Physical.default_tolerance(),
         hair_radius: 4e-5,
         ..SolverParameters::default()
     };

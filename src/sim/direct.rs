@@ -303,6 +303,27 @@ impl<T: Real> Direct<T> {
         });
     }
 
+    /// Per lane, 1 where the strand has not converged (an edge's
+    /// stretch/shear residual `|p_{k+1} - p_k - l d3_k|` is above
+    /// `tolerance` times its rest length), 0 where every edge is within it
+    /// (or a value is not finite: the quarantine judges that strand). The
+    /// residual the user sees as stretched edges and kinks, and what the
+    /// first iteration leaves after an impact; the bend/twist residual of
+    /// free hair is settled by the first iteration (the cantilever tests).
+    pub fn unconverged(&self, tolerance: f64) -> T {
+        let one = T::splat(1.0);
+        let tolerance2 = T::splat(tolerance * tolerance);
+        let mut out = T::splat(0.0);
+        for (k, c) in self.constants.iter().enumerate() {
+            let d3 = tangent(self.q[k]);
+            let (p0, p1) = (self.p[k], self.p[k + 1]);
+            let r: D3<T> = build(|i| p1[i] - p0[i] - c.l * d3[i]);
+            let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            out = T::gt_select(r2, tolerance2 * (c.l * c.l), one, out);
+        }
+        out
+    }
+
     pub fn positions_f32(&self, lane: usize, p: &mut [V3]) {
         for (o, v) in p.iter_mut().zip(&self.p) {
             *o = build(|c| v[c].lane(lane) as f32);
@@ -750,6 +771,25 @@ impl<T: Real> Direct<T> {
             }
         }
         self.iterate();
+    }
+
+    /// [`Direct::unconverged`] with the widest instructions the CPU has
+    /// (the same bits).
+    pub fn unconverged_lanes(&self, tolerance: f64) -> T {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                return unsafe { self.unconverged_avx512(tolerance) };
+            }
+        }
+        self.unconverged(tolerance)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn unconverged_avx512(&self, tolerance: f64) -> T {
+        self.unconverged(tolerance)
     }
 
     #[cfg(target_arch = "x86_64")]

@@ -133,19 +133,33 @@ pub enum Model {
 impl Model {
     /// Iterations per step when the timeline does not say. The paper's
     /// Table 1 uses 5 Gauss-Seidel sweeps. The physical model's iteration
-    /// is an exact solve of the linearised system; two meet the accuracy
-    /// the physical tests check (cantilever droop within 2 % of the
-    /// elastica at 8-32 edges and dt 1/120-1/1000, first natural frequency
-    /// within 5 %). One is not enough since the bend flexibility couples
-    /// neighbouring joints (32 edges at dt 1/120 droop 2.8 % short); more
-    /// only shrink the residual of the nonlinearity and cost one solve each.
+    /// is an exact solve of the linearised system, and by default a strand
+    /// stops as soon as its edges are within [`Model::default_tolerance`]
+    /// (free and hanging hair after one iteration: the cantilever and
+    /// frequency tests hold at one, within 1.2 % of the elastica at 8-32
+    /// edges and dt 1/120-1/1000); two is the most a strand gets, which
+    /// hair whipping onto the head needs to keep its edges' length.
     pub fn default_iterations(self) -> u32 {
         match self {
             Model::Physical => 2,
             Model::Paper => 5,
         }
     }
+
+    /// The Newton tolerance when the timeline sets neither `iterations`
+    /// nor `tolerance` (`SolverParameters::tolerance`): a tenth of a
+    /// percent of each edge for the physical model; the paper model's
+    /// sweeps always run all.
+    pub fn default_tolerance(self) -> f32 {
+        match self {
+            Model::Physical => DEFAULT_TOLERANCE,
+            Model::Paper => 0.0,
+        }
+    }
 }
+
+/// See [`Model::default_tolerance`].
+pub const DEFAULT_TOLERANCE: f32 = 1e-3;
 
 /// The hair material (000 Table 1 and METHOD H).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -301,8 +315,14 @@ impl Default for Inextensibility {
 pub struct SolverParameters {
     /// Time step, seconds.
     pub dt: f32,
-    /// Constraint iterations per step (`n` of (12)).
+    /// Constraint iterations per step (`n` of (12)); with a `tolerance`
+    /// (physical model), the most a strand gets.
     pub iterations: u32,
+    /// The physical model's Newton tolerance: a strand stops iterating
+    /// once every edge's stretch/shear residual `|p_{k+1} - p_k - l d3|`
+    /// is within this fraction of its rest length (checked after each
+    /// iteration but the last). 0 runs all `iterations`. Range 0 - 0.01.
+    pub tolerance: f32,
     /// Gravity, m/s^2.
     pub gravity: [f32; 3],
     /// Hair radius `r`, metres: collision offset and hair-hair distance.
@@ -326,6 +346,7 @@ impl Default for SolverParameters {
         SolverParameters {
             dt: 1.0 / 360.0,
             iterations: 5,
+            tolerance: 0.0,
             gravity: [0.0, -9.8, 0.0],
             hair_radius: 4.0e-5,
             hair_hair_strength: None,
@@ -351,6 +372,12 @@ impl SolverParameters {
         }
         if self.iterations == 0 || self.iterations > 1000 {
             return fail("iterations", "must be between 1 and 1000");
+        }
+        if !(self.tolerance.is_finite() && (0.0..=0.01).contains(&self.tolerance)) {
+            return fail(
+                "tolerance",
+                "must be a fraction of an edge between 0 and 0.01",
+            );
         }
         if self.gravity.iter().any(|g| !g.is_finite()) {
             return fail("gravity", "must be finite");
@@ -485,4 +512,9 @@ pub struct StepReport {
     pub contained: Vec<usize>,
     /// All frozen strands so far.
     pub frozen_total: usize,
+    /// Constraint solves run this step, summed over the strands: the
+    /// physical model's Newton iterations (each strand stops at
+    /// `SolverParameters::tolerance`, plus one after a contact moved it),
+    /// the paper model's sweeps.
+    pub solves: u64,
 }

@@ -89,6 +89,7 @@ fn parameters(dt: f32, damping: f32) -> SolverParameters {
         // The accuracy below is the default's (a timeline without
         // `iterations`).
         iterations: Model::Physical.default_iterations(),
+        tolerance: Model::Physical.default_tolerance(),
         linear_damping: damping,
         angular_damping: damping,
         ..SolverParameters::default()

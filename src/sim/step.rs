@@ -104,6 +104,8 @@ struct Context<'a> {
     dt: f32,
     inv_dt: f32,
     iterations: u32,
+    /// The physical model's Newton tolerance (`SolverParameters::tolerance`).
+    tolerance: f64,
     gravity: V3,
     linear_keep: f32,
     angular_keep: f32,
@@ -168,6 +170,9 @@ struct Work {
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
+    /// Constraint solves (physical model) or sweeps (paper model) of the
+    /// strands this working copy stepped, since the step began.
+    solves: u64,
 }
 
 impl Work {
@@ -353,6 +358,7 @@ impl Solver {
             dt,
             inv_dt: 1.0 / dt,
             iterations: parameters.iterations,
+            tolerance: f64::from(parameters.tolerance),
             gravity,
             linear_keep: (-parameters.linear_damping * dt).exp(),
             angular_keep: (-parameters.angular_damping * dt).exp(),
@@ -409,6 +415,9 @@ impl Solver {
             .for_each(|(strands, block)| {
                 block.failed.clear();
                 block.failed.reserve(strands.len());
+                for work in &mut block.works {
+                    work.solves = 0;
+                }
                 for group in strands.chunks_mut(chunk) {
                     step_chunk(&context, group, block);
                 }
@@ -423,9 +432,14 @@ impl Solver {
         for &strand in &failed {
             strands.frozen[strand] = true;
         }
+        let solves = dispatch.blocks[..block_count]
+            .iter()
+            .flat_map(|b| b.works.iter().map(|w| w.solves))
+            .sum();
         Ok(StepReport {
             frozen_total: strands.frozen.iter().filter(|f| **f).count(),
             contained: failed,
+            solves,
         })
     }
 }
@@ -842,6 +856,7 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         return finish(ctx, s, work, false);
     }
     // (iv) Constraint iterations (and collisions).
+    work.solves += u64::from(ctx.iterations);
     for _ in 0..ctx.iterations {
         work.sweep(n - 1);
         work.collide(ctx, n);
@@ -863,24 +878,14 @@ impl Work {
     /// a projection that squeezes or stretches edges.
     fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
         let m = n - 1;
-        let colliding = !ctx.colliders.is_empty();
         self.contact_normals[..n].fill([0.0; 3]);
-        if colliding {
+        if !ctx.colliders.is_empty() {
             self.begin_contacts(ctx, n);
         }
         // Taken out so the solve can borrow the rest of the working copy.
         let mut direct = std::mem::take(&mut self.direct);
         direct.begin(&[direct_input(self, n, ctx.dt)]);
-        for iteration in 0..ctx.iterations {
-            direct.iterate();
-            if colliding {
-                let last = iteration + 1 == ctx.iterations;
-                let moved = self.contacts_after_iteration(&mut direct, 0, ctx, n, last);
-                if moved && last {
-                    direct.iterate();
-                }
-            }
-        }
+        newton_iterations(ctx, std::slice::from_mut(self), &mut direct, n);
         direct.end(0, &mut self.p[..n], &mut self.q[..m]);
         self.direct = direct;
     }
@@ -993,6 +998,69 @@ fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
     }
 }
 
+/// Where a strand's Newton iterations stand (`newton_iterations`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Progress {
+    Iterating,
+    /// Its last contact projection or friction moved a vertex: one more
+    /// solve, so the step does not end on a projection that squeezes or
+    /// stretches edges.
+    OneMore,
+    Done,
+}
+
+/// The physical model's Newton iterations of the strands in `direct`'s
+/// lanes (`works[lane]`) with their contacts. A strand iterates until its
+/// stretch/shear residual is within `ctx.tolerance` of its edges (checked
+/// after each iteration but the last; 0: never) or it has had
+/// `ctx.iterations`; collisions are projected after every iteration and
+/// Coulomb friction after its last. A strand that is done keeps its
+/// state, bit for bit, while the other lanes iterate, so its result is the
+/// one it gets alone (`solve_direct`). Adds each strand's solves to its
+/// `Work::solves`.
+fn newton_iterations<T: Real>(
+    ctx: &Context<'_>,
+    works: &mut [Work],
+    direct: &mut Direct<T>,
+    n: usize,
+) {
+    let colliding = !ctx.colliders.is_empty();
+    let lanes = T::WIDTH;
+    let mut progress = [Progress::Iterating; WIDE];
+    let mut iteration = 0;
+    while progress[..lanes].iter().any(|p| *p != Progress::Done) {
+        direct.iterate_lanes();
+        iteration += 1;
+        let unconverged = (ctx.tolerance > 0.0 && iteration < ctx.iterations)
+            .then(|| direct.unconverged_lanes(ctx.tolerance));
+        for (lane, work) in works.iter_mut().take(lanes).enumerate() {
+            match progress[lane] {
+                Progress::Done => {}
+                Progress::OneMore => {
+                    work.solves += 1;
+                    progress[lane] = Progress::Done;
+                    direct.set_active(lane, false);
+                }
+                Progress::Iterating => {
+                    work.solves += 1;
+                    let last = iteration >= ctx.iterations
+                        || unconverged.is_some_and(|u| u.lane(lane) == 0.0);
+                    let moved =
+                        colliding && work.contacts_after_iteration(direct, lane, ctx, n, last);
+                    if last {
+                        progress[lane] = if moved {
+                            Progress::OneMore
+                        } else {
+                            Progress::Done
+                        };
+                        direct.set_active(lane, moved);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The physical model's step of four uniform strands: the direct solve in
 /// `f64` lanes (bit-identical to `solve_direct` on each), collisions and
 /// the rest per strand. Returns the failed ones.
@@ -1017,25 +1085,7 @@ fn step_group_direct<T: Real>(
     let inputs: [DirectInput<'_>; WIDE] =
         std::array::from_fn(|lane| direct_input(&works[lane % T::WIDTH], n, ctx.dt));
     direct.begin(&inputs[..T::WIDTH]);
-    for iteration in 0..ctx.iterations {
-        direct.iterate_lanes();
-        if colliding {
-            // As `solve_direct`: one more solve for the strands whose last
-            // projection moved a vertex; the others keep their state.
-            let last = iteration + 1 == ctx.iterations;
-            let mut again = false;
-            for (lane, work) in works.iter_mut().enumerate() {
-                let moved = work.contacts_after_iteration(direct, lane, ctx, n, last);
-                if last {
-                    direct.set_active(lane, moved);
-                    again |= moved;
-                }
-            }
-            if again {
-                direct.iterate_lanes();
-            }
-        }
-    }
+    newton_iterations(ctx, works, direct, n);
     for (lane, (s, work)) in strands.iter_mut().zip(works.iter_mut()).enumerate() {
         direct.end(lane, &mut work.p[..n], &mut work.q[..m]);
         let index = s.index;
@@ -1119,6 +1169,7 @@ fn step_group(
     }
     for (s, work) in strands.iter().zip(works.iter_mut()) {
         prepare(ctx, s, work);
+        work.solves += u64::from(ctx.iterations);
     }
     let m = n - 1;
     group.load_constants(lane_inputs(works, n), n);

@@ -185,12 +185,19 @@ pub fn material_of(timeline: &Timeline) -> Material {
 pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
     let s = &timeline.file.solver;
     let damping = s.damping.get_ref();
+    let model = *timeline.file.material.model.get_ref();
     SolverParameters {
         dt: timeline.dt as f32,
-        iterations: s.iterations.as_ref().map_or_else(
-            || timeline.file.material.model.get_ref().default_iterations(),
-            |i| *i.get_ref(),
-        ),
+        iterations: s
+            .iterations
+            .as_ref()
+            .map_or_else(|| model.default_iterations(), |i| *i.get_ref()),
+        // An iteration count given alone is the count every strand gets.
+        tolerance: match (&s.tolerance, &s.iterations) {
+            (Some(t), _) => *t.get_ref(),
+            (None, Some(_)) => 0.0,
+            (None, None) => model.default_tolerance(),
+        },
         gravity: s.gravity,
         hair_radius: *s.hair_radius.get_ref(),
         hair_hair_strength: s

@@ -282,6 +282,15 @@ impl Timeline {
                 );
             }
         }
+        if let Some(tolerance) = &s.tolerance {
+            let t = *tolerance.get_ref();
+            if !(t.is_finite() && (0.0..=0.01).contains(&t)) {
+                return fail(
+                    tolerance.span(),
+                    "tolerance must be a fraction of an edge's length between 0 and 0.01".into(),
+                );
+            }
+        }
         if !s.gravity.iter().all(|g| g.is_finite()) {
             return fail(0..0, "gravity must be finite".into());
         }

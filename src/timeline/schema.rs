@@ -234,6 +234,11 @@ pub struct SolverSpec {
     pub dt: Spanned<TimeStep>,
     /// `None`: the material model's default (`Model::default_iterations`).
     pub iterations: Option<Spanned<u32>>,
+    /// The physical model's Newton tolerance, a fraction of each edge's
+    /// length (`SolverParameters::tolerance`). `None`: the model's default
+    /// when `iterations` is not set either, else 0 (every strand gets
+    /// exactly `iterations`).
+    pub tolerance: Option<Spanned<f32>>,
     /// Acceleration of gravity, m/s^2 (Y up).
     pub gravity: [f32; 3],
     /// Hair radius, metres (collision margin and hair-hair distance).
@@ -252,6 +257,7 @@ impl Default for SolverSpec {
         SolverSpec {
             dt: Spanned::new(0..0, TimeStep::Seconds(1.0 / 360.0)),
             iterations: None,
+            tolerance: None,
             gravity: [0.0, -9.8, 0.0],
             hair_radius: Spanned::new(0..0, 4.0e-5),
             hair_hair: None,
