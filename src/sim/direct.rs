@@ -28,6 +28,7 @@
 
 use super::lanes::Real;
 use super::math::{Quat, V3};
+use super::state::JointState;
 
 /// The largest frame rotation one iteration applies, radians: a trust
 /// region for the linearisation, so a frame whose target jumps (a perm
@@ -59,16 +60,13 @@ type M3<T> = [[T; 3]; 3];
 type D3<T> = [T; 3];
 type D6<T> = [T; 6];
 
-/// Per-step constants of one edge (block) of a strand.
+/// The bend/twist compliance of one joint (the sag-free start's; the
+/// solve finds its own in `physical_constants`, the same values).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct EdgeCompliance {
-    /// Stretch/shear compliance `l / (G A)` (across) and `l / (E A)` (along
-    /// the frame's tangent), m/N.
-    pub shear: f64,
-    pub stretch: f64,
     /// Bend/twist compliance of the joint at the edge's first vertex on the
     /// Darboux vector (the diagonal of the consistent flexibility, see
-    /// `physical_constants`), 1/(N m).
+    /// `step.rs` `bend_flexibility`), 1/(N m).
     pub bend: f64,
     pub twist: f64,
     /// The flexibility coupling this joint's Darboux vector with the next
@@ -77,13 +75,24 @@ pub struct EdgeCompliance {
     pub twist_next: f64,
 }
 
+/// The physical model's material (METHOD H), the same for every strand.
+#[derive(Debug, Clone, Copy)]
+pub struct RodMaterial {
+    /// Young's and shear moduli of healthy hair, Pa.
+    pub youngs_modulus: f64,
+    pub shear_modulus: f64,
+    /// kg/m^3.
+    pub density: f64,
+}
+
 /// What one strand's solve reads.
 pub struct DirectInput<'a> {
     /// Predicted positions (`n`) and frames (`n - 1`).
     pub p: &'a [V3],
     pub q: &'a [Quat],
-    /// Vertex inverse masses (0: pinned or driven).
-    pub w: &'a [f32],
+    /// Per vertex, 1 where it is free, 0 where it is pinned or driven (the
+    /// solve weighs a free vertex by its mass).
+    pub free: &'a [f32],
     /// Per vertex, the unit normal of a contact the solve must hardly move
     /// the vertex along (zero: no contact), or empty when nothing touches.
     /// The contact is folded into the vertex's inverse mass, `w (I -
@@ -91,17 +100,81 @@ pub struct DirectInput<'a> {
     /// the surface instead of being pushed into it or having its edges
     /// squeezed by a projection after the solve.
     pub contact_normals: &'a [V3],
-    /// Frame inverse rotational inertias across the tangent (0: fixed).
-    pub w_q: &'a [f32],
-    /// Frame inverse rotational inertias about the tangent (twist).
-    pub w_twist: &'a [f32],
+    /// Rest lengths per edge slot, fibre radii per vertex, metres.
     pub l: &'a [f32],
+    pub radii: &'a [f32],
+    /// Per joint slot, the share of the healthy moduli the cuticle
+    /// gradient (13)-(14) leaves.
+    pub joints: &'a [JointState],
+    pub material: RodMaterial,
     /// Rest Darboux vectors per joint slot (canonical, real part >= 0).
     pub rest: &'a [V3],
-    pub compliance: &'a [EdgeCompliance],
     /// The fixed frame the first edge is clamped to (the scalp's).
     pub root_frame: Quat,
     pub dt: f32,
+}
+
+/// The frames' tilt inertia is at least that of a segment this speed
+/// times `dt` long (m/s), a numerical rotary inertia that vanishes as `dt`
+/// falls. A frame of a fine edge is so light (`m l^2 / 12`) that the
+/// Newton step, which has no geometric stiffness, turned it far past its
+/// edge when both ends of a near-straight strand were held (a perm rod
+/// holding the tip, the scalp the root): 5 mm edges of a 15 cm strand
+/// on a 1 cm rod blew up at the second step at dt 1/360 (edges 25,000 %
+/// long; at dt 1/1000, or with 1 cm edges, they held), and a strand pinned
+/// 0.1 um off its length did too. The blow-up needs the frame inertia ~5x
+/// (5 mm edges), ~10x (4 mm), ~30x (3 mm) at 1/360, growing as `dt^2`; a
+/// floor of 3 m/s failed at 3 mm edges, 4 m/s held 3-5 mm edges at 1/360
+/// and 1/120; 6 m/s keeps a margin. It changes no static shape (frames
+/// carry no load) and at dt 1/1000 (the frequency test) only edges under
+/// 6 mm get heavier frames: the 5 cm cantilever's first mode moves by
+/// `(k L)^2 / 24`, about 0.1 %.
+const FRAME_INERTIA_SPEED: f64 = 6.0;
+
+/// The mass of an edge, kg: a cylinder of the mean radius of its ends.
+#[inline(always)]
+pub(super) fn segment_mass<T: Real>(density: T, r0: T, r1: T, length: T) -> T {
+    let r = T::splat(0.5) * (r0 + r1);
+    density * T::splat(std::f64::consts::PI) * r * r * length
+}
+
+/// Edge `e`'s bend and twist flexibility `l / (4 EI)`, `l / (4 GJ)` per
+/// unit of the Darboux vector (half-angles: a quarter) with the cuticle
+/// factor `factor` of its ends; see `step.rs` `bend_flexibility` for how
+/// they make the joints' consistent flexibility.
+#[inline(always)]
+pub(super) fn edge_flexibility<T: Real>(
+    material: (T, T),
+    length: T,
+    r0: T,
+    r1: T,
+    factor: T,
+) -> (T, T) {
+    let (youngs, shear) = material;
+    let r = T::splat(0.5) * (r0 + r1);
+    let r2 = r * r;
+    let inertia = T::splat(std::f64::consts::PI) * (r2 * r2) / T::splat(4.0);
+    let four = T::splat(4.0);
+    let bend = length / (four * youngs * factor * inertia);
+    let twist = length / (four * shear * factor * T::splat(2.0) * inertia);
+    (bend, twist)
+}
+
+/// What `begin` finds of one edge before the blocks' constants.
+#[derive(Debug, Clone, Copy, Default)]
+struct EdgeLane<T> {
+    l: T,
+    /// Half the edge's mass (each end vertex gets it).
+    half_mass: T,
+    /// The frame's inverse inertia across and about the tangent.
+    wq: T,
+    w_twist: T,
+    /// Stretch/shear compliances `l / (G A)`, `l / (E A)`.
+    shear: T,
+    stretch: T,
+    /// The edge's own bend/twist flexibility (`edge_flexibility`).
+    bend: T,
+    twist: T,
 }
 
 /// The constants of block `k` for a step.
@@ -194,6 +267,10 @@ pub struct Direct<T> {
     constants: Vec<Constants<T>>,
     factors: Vec<Factor<T>>,
     root: [T; 4],
+    /// `begin`'s per-edge scratch, and per vertex its radius and cuticle
+    /// factor.
+    edges: Vec<EdgeLane<T>>,
+    vertices: Vec<[T; 2]>,
 }
 
 impl<T: Real> Direct<T> {
@@ -209,17 +286,18 @@ impl<T: Real> Direct<T> {
             self.factors.clear();
             self.factors.resize(m, Factor::default());
         }
-        self.w.clear();
-        self.w
-            .extend((0..n).map(|i| gather::<T>(strands, |s| s.w[i] as f64)));
         self.contact.clear();
-        self.contact.extend((0..n).map(|i| {
-            build::<T, 3>(|c| {
-                gather(strands, |s| {
-                    s.contact_normals.get(i).map_or(0.0, |v| v[c] as f64)
+        if strands.iter().all(|s| s.contact_normals.is_empty()) {
+            self.contact.resize(n, [T::splat(0.0); 3]);
+        } else {
+            self.contact.extend((0..n).map(|i| {
+                build::<T, 3>(|c| {
+                    gather(strands, |s| {
+                        s.contact_normals.get(i).map_or(0.0, |v| v[c] as f64)
+                    })
                 })
-            })
-        }));
+            }));
+        }
         self.touching = touches(&self.contact);
         self.active = T::splat(1.0);
         self.p.clear();
@@ -231,48 +309,160 @@ impl<T: Real> Direct<T> {
         self.root = build(|c| gather(strands, |s| s.root_frame[c] as f64));
         self.lambda.clear();
         self.lambda.resize(m, [T::splat(0.0); 6]);
-        // Once per strand, not per constant (the same value).
-        let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
-        self.constants.clear();
-        self.constants.extend((0..m).map(|k| {
-            // Frame k - 1's inertia where it is free.
-            let before = |s: &DirectInput<'_>, w: &[f32]| {
-                if k >= 1 && s.w_q[k - 1] > 0.0 {
-                    w[k - 1] as f64
-                } else {
-                    0.0
-                }
-            };
-            Constants {
-                l: gather(strands, |s| s.l[k] as f64),
-                w_pair: gather(strands, |s| s.w[k] as f64 + s.w[k + 1] as f64),
-                w_next: gather(strands, |s| s.w[k + 1] as f64),
-                wq: gather(strands, |s| s.w_q[k] as f64),
-                dw: gather(strands, |s| s.w_twist[k] as f64 - s.w_q[k] as f64),
-                wq_before: gather(strands, |s| before(s, s.w_q)),
-                dw_before: gather(strands, |s| before(s, s.w_twist) - before(s, s.w_q)),
-                a_sh: gather::<T>(strands, |s| s.compliance[k].shear) * inv_dt2,
-                a_st: gather::<T>(strands, |s| s.compliance[k].stretch) * inv_dt2,
-                a_b: gather::<T>(strands, |s| s.compliance[k].bend) * inv_dt2,
-                a_t: gather::<T>(strands, |s| s.compliance[k].twist) * inv_dt2,
-                a_b_next: gather::<T>(strands, |s| s.compliance[k].bend_next) * inv_dt2,
-                a_t_next: gather::<T>(strands, |s| s.compliance[k].twist_next) * inv_dt2,
-                rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
-                rest_w: gather(strands, |s| {
-                    let r = s.rest[k].map(|v| v as f64);
-                    (1.0 - (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]))
-                        .max(0.0)
-                        .sqrt()
-                }),
-            }
-        }));
+        self.physical_constants(strands);
     }
 
-    /// Writes lane `lane`'s positions and frames back (f32).
-    pub fn end(&self, lane: usize, p: &mut [V3], q: &mut [Quat]) {
-        self.positions_f32(lane, p);
-        for (o, v) in q.iter_mut().zip(&self.q) {
-            *o = build(|c| v[c].lane(lane) as f32);
+    /// The physical model's masses, inertias and compliances (METHOD H)
+    /// from the density, moduli, fibre radii and rest lengths, in the
+    /// lanes: vertices lump half of each adjacent edge's mass `rho A l`;
+    /// frames get the inertia of their segment about its centre, `m (l^2 /
+    /// 12 + r^2 / 4)` across the tangent (a rigid segment's, a choice the
+    /// papers leave open; with a floor, `FRAME_INERTIA_SPEED`) and the
+    /// fibre's own `m r^2 / 2` about it (twist). Stiffness falls with the
+    /// cuticle from root to tip (13)-(14): an edge takes the factor of its
+    /// first joint. The inverse masses and inertias are rounded to `f32`,
+    /// the precision the strand state keeps.
+    fn physical_constants(&mut self, strands: &[DirectInput<'_>]) {
+        let n = strands[0].p.len();
+        let m = n - 1;
+        let (zero, one, half) = (T::splat(0.0), T::splat(1.0), T::splat(0.5));
+        let pi = T::splat(std::f64::consts::PI);
+        let youngs: T = gather(strands, |s| s.material.youngs_modulus);
+        let shear: T = gather(strands, |s| s.material.shear_modulus);
+        let density: T = gather(strands, |s| s.material.density);
+        let arm_floor: T = gather(strands, |s| FRAME_INERTIA_SPEED * s.dt as f64);
+        // Per vertex, its radius and its joint's cuticle factor (each read
+        // once).
+        self.vertices.clear();
+        self.vertices.extend((0..n).map(|i| {
+            [
+                gather::<T>(strands, |s| s.radii[i] as f64),
+                gather::<T>(strands, |s| s.joints[i].cuticle as f64),
+            ]
+        }));
+        let vertices = &self.vertices;
+        // The cuticle factor of joint slot `i` for an edge (the root edge
+        // takes joint 1's) and for the flexibility (the root is healthy;
+        // the tip has no joint of its own and takes the last one's).
+        let edge_cuticle = |k: usize| -> T {
+            if m >= 2 {
+                vertices[k.clamp(1, m - 1)][1]
+            } else {
+                one
+            }
+        };
+        let cuticle_at = |i: usize| -> T {
+            if i == 0 || m < 2 {
+                one
+            } else {
+                vertices[i.min(m - 1)][1]
+            }
+        };
+        self.edges.clear();
+        self.edges.extend((0..m).map(|k| {
+            let l: T = gather(strands, |s| s.l[k] as f64);
+            let (r0, r1) = (vertices[k][0], vertices[k + 1][0]);
+            let r = half * (r0 + r1);
+            let area = pi * r * r;
+            let segment = segment_mass(density, r0, r1, l);
+            let arm = T::gt_select(l, arm_floor, l, arm_floor);
+            let cuticle = edge_cuticle(k);
+            let factor = half * (cuticle_at(k) + cuticle_at(k + 1));
+            let (bend, twist) = edge_flexibility((youngs, shear), l, r0, r1, factor);
+            EdgeLane {
+                l,
+                half_mass: half * segment,
+                wq: (one / (segment * (arm * arm / T::splat(12.0) + r * r / T::splat(4.0))))
+                    .to_f32_precision(),
+                w_twist: (one / (segment * r * r / T::splat(2.0))).to_f32_precision(),
+                shear: l / (shear * cuticle * area),
+                stretch: l / (youngs * cuticle * area),
+                bend,
+                twist,
+            }
+        }));
+        // A free vertex's inverse mass: half of each adjacent edge's mass.
+        self.w.clear();
+        let edges = &self.edges;
+        self.w.extend((0..n).map(|i| {
+            let free: T = gather(strands, |s| s.free[i] as f64);
+            let mass = match (i.checked_sub(1), edges.get(i)) {
+                (Some(before), Some(after)) => edges[before].half_mass + after.half_mass,
+                (None, Some(after)) => zero + after.half_mass,
+                (Some(before), None) => edges[before].half_mass,
+                (None, None) => one,
+            };
+            T::gt_select(free, zero, (one / mass).to_f32_precision(), free)
+        }));
+        let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
+        let (third, sixth) = (T::splat(3.0), T::splat(6.0));
+        let w = &self.w;
+        self.constants.clear();
+        self.constants.extend((0..m).map(|k| {
+            let e = &edges[k];
+            // The consistent flexibility: edge k - 1 and edge k each add a
+            // third of theirs to joint k, a sixth between k and k + 1.
+            let (bend_before, twist_before) = match k.checked_sub(1) {
+                Some(before) => (
+                    zero + edges[before].bend / third,
+                    zero + edges[before].twist / third,
+                ),
+                None => (zero, zero),
+            };
+            let (bend_next, twist_next) = if k + 1 < m {
+                (e.bend / sixth, e.twist / sixth)
+            } else {
+                (zero, zero)
+            };
+            // Frame k - 1's inertia where it is free.
+            let (wq_before, w_twist_before) = match k.checked_sub(1) {
+                Some(before) => {
+                    let b = &edges[before];
+                    (
+                        T::gt_select(b.wq, zero, b.wq, zero),
+                        T::gt_select(b.wq, zero, b.w_twist, zero),
+                    )
+                }
+                None => (zero, zero),
+            };
+            Constants {
+                l: e.l,
+                w_pair: w[k] + w[k + 1],
+                w_next: w[k + 1],
+                wq: e.wq,
+                dw: e.w_twist - e.wq,
+                wq_before,
+                dw_before: w_twist_before - wq_before,
+                a_sh: e.shear * inv_dt2,
+                a_st: e.stretch * inv_dt2,
+                a_b: (bend_before + e.bend / third) * inv_dt2,
+                a_t: (twist_before + e.twist / third) * inv_dt2,
+                a_b_next: bend_next * inv_dt2,
+                a_t_next: twist_next * inv_dt2,
+                rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
+                rest_w: zero,
+            }
+        }));
+        // The rest's real part `sqrt(max(1 - |rest|^2, 0))`, in the lanes.
+        for c in &mut self.constants {
+            let r = c.rest;
+            let real = one - (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+            c.rest_w = T::gt_select(real, zero, real, zero).sqrt();
+        }
+    }
+
+    /// Writes each lane's positions and frames back (f32) into
+    /// `out[lane]`, reading each vector once.
+    pub fn end(&self, out: &mut [(&mut [V3], &mut [Quat])]) {
+        for (i, v) in self.p.iter().enumerate() {
+            for (lane, (p, _)) in out.iter_mut().enumerate() {
+                p[i] = build(|c| v[c].lane(lane) as f32);
+            }
+        }
+        for (k, v) in self.q.iter().enumerate() {
+            for (lane, (_, q)) in out.iter_mut().enumerate() {
+                q[k] = build(|c| v[c].lane(lane) as f32);
+            }
         }
     }
 
@@ -771,6 +961,37 @@ impl<T: Real> Direct<T> {
             }
         }
         self.iterate();
+    }
+
+    /// [`Direct::begin`] with the widest instructions the CPU has (the
+    /// same bits).
+    pub fn begin_lanes(&mut self, strands: &[DirectInput<'_>]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { self.begin_avx512(strands) };
+                return;
+            }
+            if T::WIDTH >= 4 && std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { self.begin_avx2(strands) };
+                return;
+            }
+        }
+        self.begin(strands);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn begin_avx512(&mut self, strands: &[DirectInput<'_>]) {
+        self.begin(strands);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn begin_avx2(&mut self, strands: &[DirectInput<'_>]) {
+        self.begin(strands);
     }
 
     /// [`Direct::unconverged`] with the widest instructions the CPU has

@@ -408,6 +408,9 @@ pub trait Real:
     fn gather(f: impl FnMut(usize) -> f64) -> Self;
     fn lane(self, i: usize) -> f64;
     fn sqrt(self) -> Self;
+    /// Rounded to the nearest `f32` (the precision a value stored as
+    /// `f32` keeps), as `f64`.
+    fn to_f32_precision(self) -> Self;
     /// `if a > b { x } else { y }`, per lane.
     fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self;
     /// `if a < b { x } else { y }`, per lane.
@@ -433,6 +436,10 @@ impl Real for f64 {
     #[inline(always)]
     fn sqrt(self) -> f64 {
         f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn to_f32_precision(self) -> f64 {
+        self as f32 as f64
     }
     #[inline(always)]
     fn gt_select(a: f64, b: f64, x: f64, y: f64) -> f64 {
@@ -552,6 +559,10 @@ macro_rules! f64_lanes {
             #[inline(always)]
             fn sqrt(self) -> Self {
                 self.each(f64::sqrt)
+            }
+            #[inline(always)]
+            fn to_f32_precision(self) -> Self {
+                self.each(|a| a as f32 as f64)
             }
             #[inline(always)]
             fn gt_select(a: Self, b: Self, x: Self, y: Self) -> Self {

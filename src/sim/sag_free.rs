@@ -135,8 +135,7 @@ fn to_material(q: [f32; 4], v: D3) -> D3 {
 /// The mass `rho A l` of an edge whose end vertices have fibre radii `r0`,
 /// `r1` (the physical model lumps half to each end).
 pub(crate) fn segment_mass(density: f64, r0: f32, r1: f32, length: f64) -> f64 {
-    let r = 0.5 * (r0 as f64 + r1 as f64);
-    density * std::f64::consts::PI * r * r * length
+    super::direct::segment_mass(density, r0 as f64, r1 as f64, length)
 }
 
 impl StrandSet {

@@ -10,12 +10,11 @@ use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
-use super::direct::{Direct, DirectInput, EdgeCompliance};
+use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMaterial};
 use super::forces::{blower_dv, EdgeGrid};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
-use super::sag_free::segment_mass;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
 use super::volume::VolumeGrid;
 use super::{
@@ -126,15 +125,7 @@ struct Context<'a> {
     /// The physical model's strands go eight to a group (the CPU has
     /// AVX-512; otherwise four).
     wide: bool,
-    physical: Option<Physical>,
-}
-
-/// The physical model's material constants of a step.
-#[derive(Clone, Copy)]
-struct Physical {
-    youngs_modulus: f64,
-    shear_modulus: f64,
-    density: f64,
+    physical: Option<RodMaterial>,
 }
 
 /// Per-thread working copy of one strand.
@@ -146,7 +137,6 @@ struct Work {
     q_old: Vec<Quat>,
     q: Vec<Quat>,
     w_q: Vec<f32>,
-    w_twist: Vec<f32>,
     l: Vec<f32>,
     rest: Vec<V3>,
     stretch: Vec<StretchCoefficients>,
@@ -156,7 +146,6 @@ struct Work {
     v: Vec<V3>,
     dv: Vec<V3>,
     omega: Vec<V3>,
-    compliance: Vec<EdgeCompliance>,
     /// The physical model's contacts this step: each touching vertex's
     /// surface normal (zero: none).
     contact_normals: Vec<V3>,
@@ -194,7 +183,6 @@ impl Work {
         for v in [
             &mut self.w,
             &mut self.w_q,
-            &mut self.w_twist,
             &mut self.l,
             &mut self.contact_friction,
         ] {
@@ -205,7 +193,6 @@ impl Work {
         self.q_old.resize(n, math::IDENTITY);
         self.q.resize(n, math::IDENTITY);
         self.db.resize(n, [0.0; 4]);
-        self.compliance.resize(n, EdgeCompliance::default());
     }
 }
 
@@ -383,7 +370,7 @@ impl Solver {
             wide: *simd && strands.material.model == Model::Physical && wide_lanes_available(),
             physical: match strands.material.model {
                 Model::Paper => None,
-                Model::Physical => Some(Physical {
+                Model::Physical => Some(RodMaterial {
                     youngs_modulus: strands.material.youngs_modulus as f64,
                     shear_modulus: strands.material.shear_modulus() as f64,
                     density: strands.material.density as f64,
@@ -613,10 +600,6 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         }
     }
 
-    if let Some(physical) = ctx.physical {
-        physical_constants(&physical, dt, s, work);
-    }
-
     // Bond-rate changes and (iii) the rest shape from the bonds (15).
     for j in 1..m {
         let joint = &s.joints[j];
@@ -646,80 +629,6 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     }
 }
 
-/// The frames' tilt inertia is at least that of a segment this speed
-/// times `dt` long (m/s), a numerical rotary inertia that vanishes as `dt`
-/// falls. A frame of a fine edge is so light (`m l^2 / 12`) that the
-/// Newton step, which has no geometric stiffness, turned it far past its
-/// edge when both ends of a near-straight strand were held (a perm rod
-/// holding the tip, the scalp the root): 5 mm edges of a 15 cm strand
-/// on a 1 cm rod blew up at the second step at dt 1/360 (edges 25,000 %
-/// long; at dt 1/1000, or with 1 cm edges, they held), and a strand pinned
-/// 0.1 um off its length did too. The blow-up needs the frame inertia ~5x
-/// (5 mm edges), ~10x (4 mm), ~30x (3 mm) at 1/360, growing as `dt^2`; a
-/// floor of 3 m/s failed at 3 mm edges, 4 m/s held 3-5 mm edges at 1/360
-/// and 1/120; 6 m/s keeps a margin. It changes no static shape (frames
-/// carry no load) and at dt 1/1000 (the frequency test) only edges under
-/// 6 mm get heavier frames: the 5 cm cantilever's first mode moves by
-/// `(k L)^2 / 24`, about 0.1 %.
-const FRAME_INERTIA_SPEED: f64 = 6.0;
-
-/// The physical model's inverse masses, inverse frame inertias and
-/// compliances (METHOD H) from the density, moduli, fibre radii and rest
-/// lengths. Vertices lump half of each adjacent edge's mass `rho A l`.
-/// Frames get the inertia of their segment about its centre: `m (l^2 / 12
-/// + r^2 / 4)` across the tangent (a rigid segment's, a choice the papers
-/// leave open) and the fibre's own `m r^2 / 2` about it (twist).
-fn physical_constants(physical: &Physical, dt: f32, s: &StrandMut<'_>, work: &mut Work) {
-    let dt = dt as f64;
-    let n = s.positions.len();
-    let m = n - 1;
-    let pi = std::f64::consts::PI;
-    let mut mass = [0.0f64; 2];
-    for e in 0..m {
-        let l = work.l[e] as f64;
-        let r = 0.5 * (s.radii[e] as f64 + s.radii[e + 1] as f64);
-        let area = pi * r * r;
-        let segment = segment_mass(physical.density, s.radii[e], s.radii[e + 1], l);
-        // Vertex e gets the halves of edges e - 1 and e.
-        mass[1] = 0.5 * segment;
-        if work.w[e] > 0.0 {
-            work.w[e] = (1.0 / (mass[0] + mass[1])) as f32;
-        }
-        mass[0] = 0.5 * segment;
-        // Every frame is free: the first is clamped to the scalp by the
-        // root joint's bend/twist (see direct.rs). Its tilt inertia has a
-        // floor (see `FRAME_INERTIA_SPEED`).
-        let arm = l.max(FRAME_INERTIA_SPEED * dt);
-        work.w_q[e] = (1.0 / (segment * (arm * arm / 12.0 + r * r / 4.0))) as f32;
-        work.w_twist[e] = (1.0 / (segment * r * r / 2.0)) as f32;
-        // Stiffness falls with the cuticle from root to tip (13)-(14): the
-        // edge takes the factor of its first joint.
-        let cuticle = if m >= 2 {
-            s.joints[e.clamp(1, m - 1)].cuticle as f64
-        } else {
-            1.0
-        };
-        let e_mod = physical.youngs_modulus * cuticle;
-        let g_mod = physical.shear_modulus * cuticle;
-        work.compliance[e] = EdgeCompliance {
-            shear: l / (g_mod * area),
-            stretch: l / (e_mod * area),
-            ..EdgeCompliance::default()
-        };
-    }
-    bend_flexibility(
-        physical.youngs_modulus,
-        physical.shear_modulus,
-        &work.l[..m],
-        s.radii,
-        s.joints,
-        &mut work.compliance[..m],
-    );
-    if work.w[m] > 0.0 {
-        work.w[m] = (1.0 / mass[0]) as f32;
-    }
-}
-
 /// The bend/twist compliances of the joints: the consistent flexibility of
 /// a moment that varies linearly along each edge (the mixed, Hellinger-
 /// Reissner beam element; the XPBD multipliers are the joints' moments).
@@ -743,7 +652,6 @@ pub(super) fn bend_flexibility(
     out: &mut [EdgeCompliance],
 ) {
     let m = lengths.len();
-    let pi = std::f64::consts::PI;
     // The cuticle factor at vertex `i` (the root is healthy; the tip has
     // no joint of its own and takes the last one's).
     let cuticle = |i: usize| -> f64 {
@@ -757,13 +665,14 @@ pub(super) fn bend_flexibility(
         (c.bend, c.twist, c.bend_next, c.twist_next) = (0.0, 0.0, 0.0, 0.0);
     }
     for e in 0..m {
-        let l = lengths[e] as f64;
-        let r = 0.5 * (radii[e] as f64 + radii[e + 1] as f64);
-        let inertia = pi * r.powi(4) / 4.0;
         let factor = 0.5 * (cuticle(e) + cuticle(e + 1));
-        // Per unit of the Darboux vector (half-angles): a quarter.
-        let bend = l / (4.0 * youngs_modulus * factor * inertia);
-        let twist = l / (4.0 * shear_modulus * factor * 2.0 * inertia);
+        let (bend, twist) = edge_flexibility(
+            (youngs_modulus, shear_modulus),
+            lengths[e] as f64,
+            radii[e] as f64,
+            radii[e + 1] as f64,
+            factor,
+        );
         let c = &mut out[e];
         c.bend += bend / 3.0;
         c.twist += twist / 3.0;
@@ -851,8 +760,8 @@ fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
         return true;
     }
     prepare(ctx, &s, work);
-    if ctx.physical.is_some() {
-        work.solve_direct(ctx, n);
+    if let Some(material) = ctx.physical {
+        work.solve_direct(ctx, material, &s);
         return finish(ctx, s, work, false);
     }
     // (iv) Constraint iterations (and collisions).
@@ -876,7 +785,8 @@ impl Work {
     /// last solve (`friction`). A contact or friction that moved a vertex
     /// after the last solve gets one more solve, so the step never ends on
     /// a projection that squeezes or stretches edges.
-    fn solve_direct(&mut self, ctx: &Context<'_>, n: usize) {
+    fn solve_direct(&mut self, ctx: &Context<'_>, material: RodMaterial, s: &StrandMut<'_>) {
+        let n = s.positions.len();
         let m = n - 1;
         self.contact_normals[..n].fill([0.0; 3]);
         if !ctx.colliders.is_empty() {
@@ -884,9 +794,9 @@ impl Work {
         }
         // Taken out so the solve can borrow the rest of the working copy.
         let mut direct = std::mem::take(&mut self.direct);
-        direct.begin(&[direct_input(self, n, ctx.dt)]);
+        direct.begin(&[direct_input(ctx, material, s, self)]);
         newton_iterations(ctx, std::slice::from_mut(self), &mut direct, n);
-        direct.end(0, &mut self.p[..n], &mut self.q[..m]);
+        direct.end(&mut [(&mut self.p[..n], &mut self.q[..m])]);
         self.direct = direct;
     }
 
@@ -980,21 +890,33 @@ impl Work {
     }
 }
 
-/// What the direct solve reads of one strand's working copy.
-fn direct_input(work: &Work, n: usize, dt: f32) -> DirectInput<'_> {
+/// What the direct solve reads of one strand: its working copy, fibre
+/// radii and joints.
+fn direct_input<'a>(
+    ctx: &Context<'_>,
+    material: RodMaterial,
+    s: &'a StrandMut<'_>,
+    work: &'a Work,
+) -> DirectInput<'a> {
+    let n = s.positions.len();
     let m = n - 1;
     DirectInput {
         p: &work.p[..n],
         q: &work.q[..m],
-        w: &work.w[..n],
-        contact_normals: &work.contact_normals[..n],
-        w_q: &work.w_q[..m],
-        w_twist: &work.w_twist[..m],
+        free: &work.w[..n],
+        // Empty without colliders: the solve then skips reading zeros.
+        contact_normals: if ctx.colliders.is_empty() {
+            &[]
+        } else {
+            &work.contact_normals[..n]
+        },
         l: &work.l[..m],
+        radii: s.radii,
+        joints: s.joints,
+        material,
         rest: &work.rest[..m],
-        compliance: &work.compliance[..m],
         root_frame: work.root_frame,
-        dt,
+        dt: ctx.dt,
     }
 }
 
@@ -1066,6 +988,7 @@ fn newton_iterations<T: Real>(
 /// the rest per strand. Returns the failed ones.
 fn step_group_direct<T: Real>(
     ctx: &Context<'_>,
+    material: RodMaterial,
     strands: &mut [StrandMut<'_>],
     works: &mut [Work],
     direct: &mut Direct<T>,
@@ -1082,12 +1005,23 @@ fn step_group_direct<T: Real>(
         }
     }
     // (Inputs for the widest group; a narrower one reads its first.)
-    let inputs: [DirectInput<'_>; WIDE] =
-        std::array::from_fn(|lane| direct_input(&works[lane % T::WIDTH], n, ctx.dt));
-    direct.begin(&inputs[..T::WIDTH]);
+    let inputs: [DirectInput<'_>; WIDE] = std::array::from_fn(|lane| {
+        let lane = lane % T::WIDTH;
+        direct_input(ctx, material, &strands[lane], &works[lane])
+    });
+    direct.begin_lanes(&inputs[..T::WIDTH]);
     newton_iterations(ctx, works, direct, n);
-    for (lane, (s, work)) in strands.iter_mut().zip(works.iter_mut()).enumerate() {
-        direct.end(lane, &mut work.p[..n], &mut work.q[..m]);
+    {
+        let mut lanes = works.iter_mut().take(T::WIDTH);
+        let mut out: [_; WIDE] = std::array::from_fn(|_| {
+            lanes
+                .next()
+                .map(|w| (&mut w.p[..n], &mut w.q[..m]))
+                .unwrap_or_default()
+        });
+        direct.end(&mut out[..T::WIDTH]);
+    }
+    for (s, work) in strands.iter_mut().zip(works.iter_mut()) {
         let index = s.index;
         if !finish(ctx, s.reborrow(), work, false) {
             failed.push(index);
@@ -1113,13 +1047,13 @@ fn wide_lanes_available() -> bool {
 fn step_chunk(ctx: &Context<'_>, strands: &mut [StrandMut<'_>], block: &mut Block) {
     let n = strands.first().map_or(0, |s| s.positions.len());
     let uniform = ctx.wide
-        && ctx.physical.is_some()
         && strands.len() == WIDE
         && n >= 2
         && strands.iter().all(|s| s.active && s.positions.len() == n);
-    if uniform {
+    if let Some(material) = ctx.physical.filter(|_| uniform) {
         step_group_direct(
             ctx,
+            material,
             strands,
             &mut block.works,
             &mut block.wide,
@@ -1163,8 +1097,8 @@ fn step_group(
         }
         return;
     }
-    if ctx.physical.is_some() {
-        step_group_direct(ctx, strands, works, &mut group.direct, failed);
+    if let Some(material) = ctx.physical {
+        step_group_direct(ctx, material, strands, works, &mut group.direct, failed);
         return;
     }
     for (s, work) in strands.iter().zip(works.iter_mut()) {
