@@ -15,14 +15,22 @@ pub fn rest_darboux(
     influences: &[f32; 4],
 ) -> V3 {
     let (omega, w) = canonical_darboux(omega, w);
-    let mut out = [0.0f32; 3];
+    // The four kinds' terms first (independent, so computed side by side),
+    // then summed in kind order.
+    let mut terms = [[0.0f32; 3]; 4];
     for j in 0..4 {
         let s = double_cover_sign(omega, w, memories[j]);
         let broken = 1.0 - rates[j];
         let f = influences[j];
         for c in 0..3 {
             let remembered = s * memories[j][c];
-            out[c] += f * (remembered + broken * (omega[c] - remembered));
+            terms[j][c] = f * (remembered + broken * (omega[c] - remembered));
+        }
+    }
+    let mut out = [0.0f32; 3];
+    for term in terms {
+        for c in 0..3 {
+            out[c] += term[c];
         }
     }
     out

@@ -1038,8 +1038,7 @@ fn touches<T: Real>(normals: &[D3<T>]) -> bool {
 fn set_lane<T: Real>(to: &mut [D3<T>], lane: usize, from: &[V3]) {
     for (o, v) in to.iter_mut().zip(from) {
         for c in 0..3 {
-            let old = o[c];
-            o[c] = T::gather(|i| if i == lane { v[c] as f64 } else { old.lane(i) });
+            o[c].set_lane(lane, v[c] as f64);
         }
     }
 }

@@ -407,6 +407,9 @@ pub trait Real:
     /// Lane `i` from `f(i)`.
     fn gather(f: impl FnMut(usize) -> f64) -> Self;
     fn lane(self, i: usize) -> f64;
+    /// Replaces lane `i` (one store: loading a strand into its lane this
+    /// way is much cheaper than gathering the lanes of each number).
+    fn set_lane(&mut self, i: usize, v: f64);
     fn sqrt(self) -> Self;
     /// Rounded to the nearest `f32` (the precision a value stored as
     /// `f32` keeps), as `f64`.
@@ -432,6 +435,10 @@ impl Real for f64 {
     #[inline(always)]
     fn lane(self, _: usize) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn set_lane(&mut self, _: usize, v: f64) {
+        *self = v;
     }
     #[inline(always)]
     fn sqrt(self) -> f64 {
@@ -555,6 +562,10 @@ macro_rules! f64_lanes {
             #[inline(always)]
             fn lane(self, i: usize) -> f64 {
                 self.0[i]
+            }
+            #[inline(always)]
+            fn set_lane(&mut self, i: usize, v: f64) {
+                self.0[i] = v;
             }
             #[inline(always)]
             fn sqrt(self) -> Self {

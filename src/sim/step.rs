@@ -114,6 +114,8 @@ struct Context<'a> {
     influences: [f32; 4],
     drive: [f32; 4],
     targets: [Option<f32>; 4],
+    /// No drive, target or blower changes a bond rate this step.
+    bonds_still: bool,
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
     hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
@@ -360,6 +362,9 @@ impl Solver {
             influences: strands.influences,
             drive: environment.bond_rate_drive.map(|r| r * dt),
             targets: environment.bond_rate_targets,
+            bonds_still: environment.bond_rate_drive.iter().all(|r| *r * dt == 0.0)
+                && environment.bond_rate_targets.iter().all(Option::is_none)
+                && environment.blower.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid, snapshot.as_slice())),
@@ -611,18 +616,30 @@ fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
         let mut db = [0.0f32; 4];
-        for k in 0..4 {
-            let extra = if k == 0 { work.db[j][0] } else { 0.0 };
-            let b = joint.rates[k];
-            let driven = match ctx.targets[k] {
-                Some(goal) if b < goal => (b + ctx.drive[k].abs()).min(goal),
-                Some(goal) => (b - ctx.drive[k].abs()).max(goal),
-                None => b + ctx.drive[k],
-            };
-            let target = (driven + extra).clamp(0.0, 1.0);
-            db[k] = target - b;
-            // Breaking acts at once; re-forming takes effect at (v).
-            effective[k] = b.min(target);
+        if ctx.bonds_still {
+            // The general case below with zero drive and extra: the same
+            // values (`b + 0` differs from `b` only for -0, which the
+            // clamp and `1 - b` of the rest shape treat as 0).
+            for k in 0..4 {
+                let b = joint.rates[k];
+                let target = b.clamp(0.0, 1.0);
+                db[k] = target - b;
+                effective[k] = b.min(target);
+            }
+        } else {
+            for k in 0..4 {
+                let extra = if k == 0 { work.db[j][0] } else { 0.0 };
+                let b = joint.rates[k];
+                let driven = match ctx.targets[k] {
+                    Some(goal) if b < goal => (b + ctx.drive[k].abs()).min(goal),
+                    Some(goal) => (b - ctx.drive[k].abs()).max(goal),
+                    None => b + ctx.drive[k],
+                };
+                let target = (driven + extra).clamp(0.0, 1.0);
+                db[k] = target - b;
+                // Breaking acts at once; re-forming takes effect at (v).
+                effective[k] = b.min(target);
+            }
         }
         work.db[j] = db;
         work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
@@ -1227,7 +1244,15 @@ fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) 
     }
     s.positions.copy_from_slice(&work.p[..n]);
     s.velocities.copy_from_slice(&work.v[..n]);
-    s.velocity_corrections.copy_from_slice(&work.dv[..n]);
+    // The physical model has none: they stay zero, so they are written only
+    // when not already all +0 (a write would dirty memory for nothing).
+    let unchanged = ftl.is_none()
+        && s.velocity_corrections
+            .iter()
+            .all(|c| c.iter().all(|v| v.to_bits() == 0));
+    if !unchanged {
+        s.velocity_corrections.copy_from_slice(&work.dv[..n]);
+    }
     for e in 0..m {
         s.edges[e].rotation = work.q[e];
         s.edges[e].angular_velocity = work.omega[e];
