@@ -10,15 +10,18 @@ pub fn all_finite(positions: &[V3], velocities: &[V3], frames: &[Quat], angular:
     // A float is NaN or infinite exactly when its exponent bits are all
     // ones; OR-ing the test over all values has no branch and no long
     // dependency chain, so it vectorises.
+    // The slices flat, each a plain loop: a chain of iterators over the
+    // vectors did not vectorise.
     const EXPONENT: u32 = 0x7f80_0000;
-    let bad = |x: &f32| u32::from(x.to_bits() & EXPONENT == EXPONENT);
-    let mut any = 0u32;
-    for v in positions.iter().chain(velocities).chain(angular) {
-        any |= v.iter().map(bad).fold(0, |a, b| a | b);
-    }
-    for q in frames {
-        any |= q.iter().map(bad).fold(0, |a, b| a | b);
-    }
+    let bad = |values: &[f32]| {
+        values
+            .iter()
+            .fold(0u32, |any, x| any | u32::from(x.to_bits() & EXPONENT == EXPONENT))
+    };
+    let any = bad(positions.as_flattened())
+        | bad(velocities.as_flattened())
+        | bad(angular.as_flattened())
+        | bad(frames.as_flattened());
     any == 0
 }
 

@@ -127,6 +127,8 @@ struct Context<'a> {
     /// The physical model's strands go eight to a group (the CPU has
     /// AVX-512; otherwise four).
     wide: bool,
+    /// The CPU has AVX-512: the per-strand phases use it too.
+    avx512: bool,
     physical: Option<RodMaterial>,
 }
 
@@ -373,6 +375,7 @@ impl Solver {
             root_transform: strands.root_transform,
             simd: *simd,
             wide: *simd && strands.material.model == Model::Physical && wide_lanes_available(),
+            avx512: *simd && wide_lanes_available(),
             physical: match strands.material.model {
                 Model::Paper => None,
                 Model::Physical => Some(RodMaterial {
@@ -513,6 +516,25 @@ impl StrandMut<'_> {
 /// and frames, bond-rate changes, (iii) rest shape from the bonds, the
 /// constraint coefficients.
 fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+        unsafe { prepare_avx512(ctx, s, work) };
+        return;
+    }
+    prepare_strand(ctx, s, work);
+}
+
+/// `prepare` in the CPU's widest instructions (the same operations, no
+/// FMA: the same bits; the compiler vectorises more of the loops).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn prepare_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    prepare_strand(ctx, s, work);
+}
+
+#[inline(always)]
+fn prepare_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
     let m = n - 1;
     work.resize(n);
@@ -1168,6 +1190,23 @@ fn lane_inputs(works: &[Work], n: usize) -> [LaneInput<'_>; LANES] {
 /// bond update (17); commits the strand if its new state is finite.
 /// `ftl_done`: the inextensibility pass already ran (in lanes).
 fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+        return unsafe { finish_avx512(ctx, s, work, ftl_done) };
+    }
+    finish_strand(ctx, s, work, ftl_done)
+}
+
+/// `finish` in the CPU's widest instructions (as `prepare_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn finish_avx512(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
+    finish_strand(ctx, s, work, ftl_done)
+}
+
+#[inline(always)]
+fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
     let n = s.positions.len();
     let m = n - 1;
     let dt = ctx.dt;
