@@ -172,9 +172,10 @@ struct EdgeLane<T> {
     /// Stretch/shear compliances `l / (G A)`, `l / (E A)`.
     shear: T,
     stretch: T,
-    /// The edge's own bend/twist flexibility (`edge_flexibility`).
-    bend: T,
-    twist: T,
+    /// A third of the edge's own bend/twist flexibility
+    /// (`edge_flexibility`): what it adds to each end joint.
+    bend_third: T,
+    twist_third: T,
 }
 
 /// The constants of block `k` for a step.
@@ -369,6 +370,7 @@ impl<T: Real> Direct<T> {
             let cuticle = edge_cuticle(k);
             let factor = half * (cuticle_at(k) + cuticle_at(k + 1));
             let (bend, twist) = edge_flexibility((youngs, shear), l, r0, r1, factor);
+            let third = T::splat(3.0);
             EdgeLane {
                 l,
                 half_mass: half * segment,
@@ -377,8 +379,8 @@ impl<T: Real> Direct<T> {
                 w_twist: (one / (segment * r * r / T::splat(2.0))).to_f32_precision(),
                 shear: l / (shear * cuticle * area),
                 stretch: l / (youngs * cuticle * area),
-                bend,
-                twist,
+                bend_third: bend / third,
+                twist_third: twist / third,
             }
         }));
         // A free vertex's inverse mass: half of each adjacent edge's mass.
@@ -395,7 +397,6 @@ impl<T: Real> Direct<T> {
             T::gt_select(free, zero, (one / mass).to_f32_precision(), free)
         }));
         let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
-        let (third, sixth) = (T::splat(3.0), T::splat(6.0));
         let w = &self.w;
         self.constants.clear();
         self.constants.extend((0..m).map(|k| {
@@ -404,13 +405,15 @@ impl<T: Real> Direct<T> {
             // third of theirs to joint k, a sixth between k and k + 1.
             let (bend_before, twist_before) = match k.checked_sub(1) {
                 Some(before) => (
-                    zero + edges[before].bend / third,
-                    zero + edges[before].twist / third,
+                    zero + edges[before].bend_third,
+                    zero + edges[before].twist_third,
                 ),
                 None => (zero, zero),
             };
+            // A sixth between joints k and k + 1: half of the third, exactly
+            // (halving is exact, so `(x / 3) / 2` is `x / 6` to the bit).
             let (bend_next, twist_next) = if k + 1 < m {
-                (e.bend / sixth, e.twist / sixth)
+                (e.bend_third * half, e.twist_third * half)
             } else {
                 (zero, zero)
             };
@@ -435,8 +438,8 @@ impl<T: Real> Direct<T> {
                 dw_before: w_twist_before - wq_before,
                 a_sh: e.shear * inv_dt2,
                 a_st: e.stretch * inv_dt2,
-                a_b: (bend_before + e.bend / third) * inv_dt2,
-                a_t: (twist_before + e.twist / third) * inv_dt2,
+                a_b: (bend_before + e.bend_third) * inv_dt2,
+                a_t: (twist_before + e.twist_third) * inv_dt2,
                 a_b_next: bend_next * inv_dt2,
                 a_t_next: twist_next * inv_dt2,
                 rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),

@@ -14,9 +14,9 @@ pub fn all_finite(positions: &[V3], velocities: &[V3], frames: &[Quat], angular:
     // vectors did not vectorise.
     const EXPONENT: u32 = 0x7f80_0000;
     let bad = |values: &[f32]| {
-        values
-            .iter()
-            .fold(0u32, |any, x| any | u32::from(x.to_bits() & EXPONENT == EXPONENT))
+        values.iter().fold(0u32, |any, x| {
+            any | u32::from(x.to_bits() & EXPONENT == EXPONENT)
+        })
     };
     let any = bad(positions.as_flattened())
         | bad(velocities.as_flattened())
