@@ -2,8 +2,9 @@
 # The README's scaling table of the physical model: `groombake bench` on the
 # generated scalp groom at 1,000, 10,000 and 100,000 strands x 32 vertices,
 # 1 and 2 threads, free hair (no hair-hair, no collider), dt 1/360, the
-# model's default iterations. Prints a markdown table: wall and CPU time per
-# vertex-step (the minimum of REPEATS runs), peak resident memory from
+# model's default iterations and Newton tolerance. Prints a markdown table:
+# wall and CPU time per vertex-step (the minimum of REPEATS runs), peak
+# resident memory from
 # /usr/bin/time -v, and the load average during the runs. Not run by CI.
 #
 # Usage: bench/scaling.sh [GROOMBAKE]   (default: target/release/groombake;

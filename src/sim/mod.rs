@@ -18,7 +18,10 @@
 //! - Per-step order (METHOD D): forces and bond-rate changes, rest shape
 //!   (15), `iterations` x (stretch/shear, bend/twist, collisions), one
 //!   Follow-The-Leader pass, final collision pass, velocities, bond update
-//!   (17). Strands run in parallel in groups of four (SIMD lanes); every
+//!   (17). The physical model's Newton iterations stop early for a strand
+//!   whose edges are within `SolverParameters::tolerance` (and its constants,
+//!   masses and compliances, are found in the solve's lanes, direct.rs).
+//!   Strands run in parallel in groups of four or eight (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.
 //! - Before the first step the caller may solve the sag-free rest shape
