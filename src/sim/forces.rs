@@ -54,11 +54,15 @@ struct Entry {
 }
 
 /// An entry as an edge's scan reads it: the vertex's position and the
-/// key (half the bytes of an [`Entry`]: the scan is bound by memory).
+/// key and its strand (fewer bytes than an [`Entry`]: the scan is bound
+/// by memory).
 #[derive(Debug, Clone, Copy, Default)]
 struct Probe {
     position: V3,
     key: u32,
+    /// The vertex's strand: an edge skips its own strand's vertices, which
+    /// share its cells and lie on its line, before any distance test.
+    strand: u32,
 }
 
 /// A push an edge found: the vertex, the edge (its first vertex) and the
@@ -257,15 +261,18 @@ fn crossings(from: [i32; 3], to: [i32; 3]) -> i64 {
         .sum()
 }
 
-/// The cells segment `a`-`b` passes through, walked from `a` to `b`
+/// Visits the cells segment `a`-`b` passes through, walked from `a` to `b`
 /// (Amanatides and Woo 1987), without repeats (hand-written: the walk is
-/// a dozen lines and the hot loop of the search). `None` when there are more
-/// than `MAX_CELLS_PER_EDGE`.
-fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) -> Option<usize> {
+/// a dozen lines and the hot loop of the search). Returns false, visiting
+/// none, when there are `MAX_CELLS_PER_EDGE` or more. (A visitor rather
+/// than an array of cells: zeroing the array was a 384-byte memset per
+/// edge.)
+#[inline(always)]
+fn walk_cells(a: V3, b: V3, inv_cell: f32, mut visit: impl FnMut(u32)) -> bool {
     let mut at = cell_of(a, inv_cell);
     let end = cell_of(b, inv_cell);
     if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
-        return None;
+        return false;
     }
     let mut step = [0i32; 3];
     // Segment parameter of the next cell wall per axis, and between walls.
@@ -284,8 +291,7 @@ fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) 
             next[c] = (at[c] as f32 - x) / d;
         }
     }
-    out[0] = pack(at);
-    let mut n = 1;
+    visit(pack(at));
     // One wall per step, on an axis not yet at the end cell, so the walk
     // ends in `b`'s cell whatever round-off does at corners.
     while at != end {
@@ -297,10 +303,9 @@ fn edge_cells(a: V3, b: V3, inv_cell: f32, out: &mut [u32; MAX_CELLS_PER_EDGE]) 
         }
         at[c] += step[c];
         next[c] += delta[c];
-        out[n] = pack(at);
-        n += 1;
+        visit(pack(at));
     }
-    Some(n)
+    true
 }
 
 /// Bucket ranges sorted independently (in parallel).
@@ -351,9 +356,10 @@ fn sort_into_buckets(
                 part_starts[p] += part_starts[p - 1];
             }
             let mut cursor = *part_starts;
-            grouped.clear();
             // As much room as the chunk has: no allocation as it fills.
-            grouped.reserve(chunk.capacity());
+            // Every slot is written below, so only a change of length
+            // touches memory here (no clearing).
+            grouped.reserve(chunk.capacity().saturating_sub(grouped.len()));
             grouped.resize(chunk.len(), Entry::default());
             for e in chunk {
                 let slot = &mut cursor[part_of(e)];
@@ -364,10 +370,11 @@ fn sort_into_buckets(
     let grouped = &scratch.grouped[..chunks.len()];
     let part_starts = &scratch.part_starts;
     let total: usize = chunks.iter().map(Vec::len).sum();
-    out.clear();
-    out.reserve(chunks.iter().map(Vec::capacity).sum());
+    // `out` and `starts` are written whole below: resized, not cleared
+    // (clearing them was a serial pass over 20 MB at 10k strands).
+    let room: usize = chunks.iter().map(Vec::capacity).sum();
+    out.reserve(room.saturating_sub(out.len()));
     out.resize(total, Entry::default());
-    starts.clear();
     starts.resize(buckets + 1, 0);
     starts[buckets] = total as u32;
     // Each part's slice of `out`, cut in order without allocating.
@@ -450,11 +457,19 @@ impl EdgeGrid {
     ) {
         let reach = 2.0 * radius;
         self.find_owners(positions.len(), offsets, active);
-        let mean_extent = self.mean_edge_extent(positions);
+        let (mean_extent, largest_extent) = self.edge_extents(positions);
         let mut cell = cell_size(reach, rest_longest, mean_extent, self.last);
         // Torn strands: bigger cells until few edges are left over.
         loop {
-            self.long_edges = self.count_long_edges(positions, 1.0 / cell);
+            // An edge crosses at most `extent / cell + 3` cell walls (one
+            // more per axis for where it starts; one more for round-off):
+            // when the largest cannot reach the limit, none is counted.
+            let bound = largest_extent / f64::from(cell) + 4.0;
+            self.long_edges = if bound < MAX_CELLS_PER_EDGE as f64 {
+                0
+            } else {
+                self.count_long_edges(positions, 1.0 / cell)
+            };
             if self.long_edges <= MAX_LONG_EDGES || cell >= f32::MAX / 4.0 {
                 break;
             }
@@ -491,32 +506,40 @@ impl EdgeGrid {
         (strand != u32::MAX && owner.get(v + 1) == Some(&strand)).then_some(strand)
     }
 
-    /// The mean `|dx| + |dy| + |dz|` of the finite edges
-    /// (about the cells an edge crosses times the cell size), summed in
-    /// whole micrometres: exact in any order, so the cell size does not
-    /// depend on the thread count.
-    fn mean_edge_extent(&self, positions: &[V3]) -> f64 {
+    /// The mean `|dx| + |dy| + |dz|` of the finite edges (about the
+    /// cells an edge crosses times the cell size), summed in whole
+    /// micrometres: exact in any order, so the cell size does not depend
+    /// on the thread count; and the largest of an edge between finite
+    /// points (infinite when the difference overflows).
+    fn edge_extents(&self, positions: &[V3]) -> (f64, f64) {
         use rayon::prelude::*;
         let owner = &self.owner;
-        let (count, micrometres) = (0..positions.len().saturating_sub(1))
+        let (count, micrometres, largest) = (0..positions.len().saturating_sub(1))
             .into_par_iter()
             .with_min_len(CHUNK_VERTICES)
             .filter(|&v| Self::edge_strand(owner, v).is_some())
             .map(|v| {
-                let d = sub(positions[v + 1], positions[v]);
+                let (a, b) = (positions[v], positions[v + 1]);
+                let d = sub(b, a);
                 let extent = f64::from(d[0].abs() + d[1].abs() + d[2].abs());
                 if extent.is_finite() {
-                    (1u64, (extent * 1e6).min(1e12) as u64)
+                    (1u64, (extent * 1e6).min(1e12) as u64, extent)
+                } else if is_finite3(a) && is_finite3(b) {
+                    (0, 0, f64::INFINITY)
                 } else {
-                    (0, 0)
+                    (0, 0, 0.0)
                 }
             })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1.saturating_add(b.1)));
-        if count > 0 {
+            .reduce(
+                || (0, 0, 0.0),
+                |a, b| (a.0 + b.0, a.1.saturating_add(b.1), a.2.max(b.2)),
+            );
+        let mean = if count > 0 {
             micrometres as f64 * 1e-6 / count as f64
         } else {
             0.0
-        }
+        };
+        (mean, largest)
     }
 
     /// The finite edges that cross too many cells of size `1 / inv_cell`.
@@ -598,9 +621,11 @@ impl EdgeGrid {
             &mut self.starts,
             &mut self.entries,
         );
-        self.probes.clear();
-        self.probes.reserve(self.entries.capacity());
+        // Written whole below: resized, not cleared.
+        self.probes
+            .reserve(self.entries.capacity().saturating_sub(self.probes.len()));
         self.probes.resize(self.entries.len(), Probe::default());
+        let owner = &self.owner;
         self.probes
             .par_chunks_mut(CHUNK_ENTRIES)
             .zip(self.entries.par_chunks(CHUNK_ENTRIES))
@@ -609,6 +634,7 @@ impl EdgeGrid {
                     *probe = Probe {
                         position: e.position,
                         key: e.key & CELL,
+                        strand: owner[e.vertex as usize],
                     };
                 }
             });
@@ -806,58 +832,49 @@ impl Lookup<'_> {
     /// [`Self::edge_pushes`] of a finite edge of an active strand, from
     /// `a` to `b`.
     fn pushes_of(&self, edge: usize, a: V3, b: V3, out: &mut Vec<Pair>, scanned: &mut u64) {
-        // The strand is looked up on a hit only (a load at random).
-        let strand = || self.owner[edge];
+        let strand = self.owner[edge];
         let reach = self.reach;
         let first = out.len();
         let near = NearLine::new(a, b, reach);
-        let mut cells = [0u32; MAX_CELLS_PER_EDGE];
-        match edge_cells(a, b, self.inv_cell, &mut cells) {
-            Some(n) => {
-                for &key in &cells[..n] {
-                    let bucket = bucket_of(unpack(key), self.bits);
-                    let (start, end) = (
-                        self.starts[bucket] as usize,
-                        self.starts[bucket + 1] as usize,
-                    );
-                    *scanned += (end - start) as u64;
-                    for (i, e) in self.probes[start..end].iter().enumerate() {
-                        if e.key != key || !near.may_reach(e.position) {
-                            continue;
-                        }
-                        if let Some(push) = edge_push(e.position, a, b, reach) {
-                            let vertex = self.entries[start + i].vertex;
-                            if self.owner[vertex as usize] != strand() {
-                                out.push((vertex, edge as u32, push));
-                            }
-                        }
-                    }
+        let walked = walk_cells(a, b, self.inv_cell, |key| {
+            let bucket = bucket_of(unpack(key), self.bits);
+            let (start, end) = (
+                self.starts[bucket] as usize,
+                self.starts[bucket + 1] as usize,
+            );
+            *scanned += (end - start) as u64;
+            for (i, e) in self.probes[start..end].iter().enumerate() {
+                if e.key != key || e.strand == strand || !near.may_reach(e.position) {
+                    continue;
                 }
-                // A vertex met in several cells pushes the same each
-                // time: once.
-                if out.len() - first > 1 {
-                    out[first..].sort_unstable_by_key(|&(v, _, _)| v);
-                    let mut kept = first + 1;
-                    for i in first + 1..out.len() {
-                        if out[i].0 != out[kept - 1].0 {
-                            out[kept] = out[i];
-                            kept += 1;
-                        }
-                    }
-                    out.truncate(kept);
+                if let Some(push) = edge_push(e.position, a, b, reach) {
+                    out.push((self.entries[start + i].vertex, edge as u32, push));
                 }
             }
-            None => {
-                // Too long to walk: every vertex of another active strand.
-                let strand = strand();
-                *scanned += self.positions.len() as u64;
-                for (v, (&p, &owner)) in self.positions.iter().zip(self.owner).enumerate() {
-                    if owner == u32::MAX || owner == strand {
-                        continue;
+        });
+        if walked {
+            // A vertex met in several cells pushes the same each
+            // time: once.
+            if out.len() - first > 1 {
+                out[first..].sort_unstable_by_key(|&(v, _, _)| v);
+                let mut kept = first + 1;
+                for i in first + 1..out.len() {
+                    if out[i].0 != out[kept - 1].0 {
+                        out[kept] = out[i];
+                        kept += 1;
                     }
-                    if let Some(push) = edge_push(p, a, b, reach) {
-                        out.push((v as u32, edge as u32, push));
-                    }
+                }
+                out.truncate(kept);
+            }
+        } else {
+            // Too long to walk: every vertex of another active strand.
+            *scanned += self.positions.len() as u64;
+            for (v, (&p, &owner)) in self.positions.iter().zip(self.owner).enumerate() {
+                if owner == u32::MAX || owner == strand {
+                    continue;
+                }
+                if let Some(push) = edge_push(p, a, b, reach) {
+                    out.push((v as u32, edge as u32, push));
                 }
             }
         }
