@@ -16,7 +16,12 @@ for line in sys.stdin:
     if r.get("program") == "pbd":
         key = (f"PositionBasedDynamics {r['model']}", r["iterations"], r["threads"])
     else:
-        key = (f"groombake {r['model']}", r["iterations"], r["threads"])
+        # With a Newton tolerance the count is a maximum: say what the
+        # strands got on average.
+        iterations = r["iterations"]
+        if r.get("tolerance"):
+            iterations = f"at most {iterations} ({r['solves_per_strand_step']:.2f} per strand-step)"
+        key = (f"groombake {r['model']}", iterations, r["threads"])
     runs.setdefault(key, []).append(r)
 
 best = {
