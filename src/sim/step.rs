@@ -618,7 +618,7 @@ fn prepare_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
         }
         if let Some(volume) = ctx.volume {
-            v = math::add(v, volume.dv(s.first_vertex + i));
+            v = math::add(v, volume.dv(s.index, i));
         }
         work.p[i] = math::add(x, math::scale(v, dt));
     }
@@ -1101,8 +1101,9 @@ fn step_group_direct<T: Real>(
     }
 }
 
-/// Whether the CPU has the instructions of the eight-wide solve.
-fn wide_lanes_available() -> bool {
+/// Whether the CPU has the instructions of the eight-wide solve (AVX-512F;
+/// also what the volume grid is compiled for).
+pub(super) fn wide_lanes_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx512f")
