@@ -275,6 +275,25 @@ pub struct Direct<T> {
 }
 
 impl<T: Real> Direct<T> {
+    /// Room for strands of `n` vertices, so that `begin` allocates nothing
+    /// for them. A working copy that has only served the eight-wide solve
+    /// has never begun its own; without this, the first step that sends it
+    /// a strand on its own (a group with a frozen strand) allocated then.
+    pub fn reserve(&mut self, n: usize) {
+        fn room<U>(v: &mut Vec<U>, n: usize) {
+            v.reserve(n.saturating_sub(v.len()));
+        }
+        room(&mut self.w, n);
+        room(&mut self.contact, n);
+        room(&mut self.p, n);
+        room(&mut self.q, n);
+        room(&mut self.lambda, n);
+        room(&mut self.constants, n);
+        room(&mut self.factors, n);
+        room(&mut self.edges, n);
+        room(&mut self.vertices, n);
+    }
+
     /// Loads the predicted positions and frames and the constants of
     /// `T::WIDTH` strands of one vertex count, and resets the multipliers.
     pub fn begin(&mut self, strands: &[DirectInput<'_>]) {

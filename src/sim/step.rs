@@ -199,6 +199,7 @@ impl Work {
         ] {
             v.resize(n, 0.0);
         }
+        self.direct.reserve(n);
         self.stretch.resize(n, StretchCoefficients::default());
         self.bend.resize(n, [0.0; 2]);
         self.q_old.resize(n, math::IDENTITY);
