@@ -220,7 +220,8 @@ fn cell_size(reach: f32, rest_longest: f32, mean_extent: f64, last: Option<Measu
 fn floor_i32(x: f32) -> i32 {
     let t = x as i32;
     if (t as f32) > x {
-        t - 1
+        // Saturating: below i32::MIN the cast already gave the end cell.
+        t.saturating_sub(1)
     } else {
         t
     }

@@ -29,7 +29,6 @@ pub struct Solver {
     parameters: SolverParameters,
     /// Groups of four in SIMD lanes (off only to test the scalar path).
     simd: bool,
-    snapshot: Vec<V3>,
     grid: EdgeGrid,
     volume: VolumeGrid,
     dispatch: Dispatch,
@@ -125,7 +124,7 @@ struct Context<'a> {
     bonds_still: bool,
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
-    hair_hair: Option<(f32, &'a EdgeGrid, &'a [V3])>,
+    hair_hair: Option<(f32, &'a EdgeGrid)>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
     colliders: &'a [PreparedCollider<'a>],
@@ -214,7 +213,6 @@ impl Solver {
         Ok(Solver {
             parameters,
             simd: true,
-            snapshot: Vec::new(),
             grid: EdgeGrid::default(),
             volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
@@ -298,7 +296,6 @@ impl Solver {
         }
         let Solver {
             grid,
-            snapshot,
             volume,
             dispatch,
             simd,
@@ -328,8 +325,6 @@ impl Solver {
         let hair_hair = match parameters.hair_hair_strength {
             _ if volumetric.is_some() => None,
             Some(alpha) if alpha > 0.0 => {
-                snapshot.clear();
-                snapshot.extend_from_slice(&strands.positions);
                 let rest_longest = {
                     use rayon::prelude::*;
                     strands
@@ -341,7 +336,7 @@ impl Solver {
                         .reduce(|| 0.0, f32::max)
                 };
                 grid.build(
-                    snapshot,
+                    &strands.positions,
                     &strands.offsets,
                     active,
                     parameters.hair_radius,
@@ -377,7 +372,7 @@ impl Solver {
                 && environment.blower.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
-            hair_hair: hair_hair.map(|alpha| (alpha, &*grid, snapshot.as_slice())),
+            hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
             volume: volumetric,
             colliders: &prepared,
             root_transform: strands.root_transform,
@@ -615,7 +610,7 @@ fn prepare_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         let moving = math::sub(s.velocities[i], s.velocity_corrections[i]);
         let mut v = math::add(math::scale(moving, ctx.linear_keep), math::scale(a, dt));
         v = math::add(v, blower_dv_here);
-        if let Some((alpha, grid, _)) = ctx.hair_hair {
+        if let Some((alpha, grid)) = ctx.hair_hair {
             v = math::add(v, grid.penalty_dv(s.first_vertex + i, alpha, dt));
         }
         if let Some(volume) = ctx.volume {
