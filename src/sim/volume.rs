@@ -383,12 +383,17 @@ struct Hair<'a> {
     offsets: &'a [usize],
 }
 
-/// What the gather reads: the summed grid and the step's settings.
+/// What the gather reads: the summed grid, the ordered strands (`order`
+/// and `starts` as in [`VolumeGrid`], `offsets` as in StrandSet) and the
+/// step's settings.
 struct Gather<'a> {
     grid: Placement,
     nodes: &'a [Node],
     places: &'a [Place],
     velocities: &'a [V3],
+    order: &'a [u32],
+    starts: &'a [usize],
+    offsets: &'a [usize],
     /// The share of the velocity difference taken this step.
     keep: f32,
     /// Repulsion times dt.
@@ -398,48 +403,27 @@ struct Gather<'a> {
 }
 
 impl Gather<'_> {
-    /// The changes of ordered slots `first..` into `out`: `order` and
-    /// `starts` as in [`VolumeGrid`], `offsets` as in StrandSet.
-    fn chunk(
-        &self,
-        first: usize,
-        out: &mut [V3],
-        order: &[u32],
-        starts: &[usize],
-        offsets: &[usize],
-    ) {
+    /// The changes of ordered slots `first..` into `out`.
+    fn chunk(&self, first: usize, out: &mut [V3]) {
         #[cfg(target_arch = "x86_64")]
         if wide_lanes_available() {
             // SAFETY: the CPU has AVX-512F.
-            return unsafe { self.chunk_avx512(first, out, order, starts, offsets) };
+            return unsafe { self.chunk_avx512(first, out) };
         }
-        self.chunk_slots(first, out, order, starts, offsets)
+        self.chunk_slots(first, out)
     }
 
     /// `chunk` in the CPU's widest instructions (the same operations, no
     /// FMA: the same bits).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn chunk_avx512(
-        &self,
-        first: usize,
-        out: &mut [V3],
-        order: &[u32],
-        starts: &[usize],
-        offsets: &[usize],
-    ) {
-        self.chunk_slots(first, out, order, starts, offsets)
+    fn chunk_avx512(&self, first: usize, out: &mut [V3]) {
+        self.chunk_slots(first, out)
     }
 
     #[inline(always)]
-    fn chunk_slots(
-        &self,
-        first: usize,
-        out: &mut [V3],
-        order: &[u32],
-        starts: &[usize],
-        offsets: &[usize],
-    ) {
+    fn chunk_slots(&self, first: usize, out: &mut [V3]) {
+        let (order, starts, offsets) = (self.order, self.starts, self.offsets);
         // The ordered strand holding slot `first`, then on.
         let mut at = starts.partition_point(|&s| s <= first) - 1;
         for (j, dv) in out.iter_mut().enumerate() {
@@ -733,18 +717,20 @@ impl VolumeGrid {
             nodes: &self.partial[0].nodes,
             places: &self.places,
             velocities,
+            order: &self.order,
+            starts: &self.ordered_starts,
+            offsets,
             keep,
             push,
             scale,
         };
-        let (order, starts) = (&self.order, &self.ordered_starts);
+        let slots = self.ordered_starts.last().copied().unwrap_or(0);
         self.ordered_dv.clear();
-        self.ordered_dv
-            .resize(starts.last().copied().unwrap_or(0), [0.0; 3]);
+        self.ordered_dv.resize(slots, [0.0; 3]);
         self.ordered_dv
             .par_chunks_mut(GATHER_CHUNK)
             .enumerate()
-            .for_each(|(k, out)| gather.chunk(k * GATHER_CHUNK, out, order, starts, offsets));
+            .for_each(|(k, out)| gather.chunk(k * GATHER_CHUNK, out));
     }
 
     /// Back to all zero: the spans this step wrote.
