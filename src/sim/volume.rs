@@ -125,6 +125,14 @@ impl Span {
         self.end = self.end.max(end as u32);
     }
 
+    /// Widens this span over `other` (nothing when `other` is empty).
+    fn join(&mut self, other: Span) {
+        if other.start < other.end {
+            self.start = self.start.min(other.start);
+            self.end = self.end.max(other.end);
+        }
+    }
+
     fn range(&self) -> std::ops::Range<usize> {
         if self.start < self.end {
             self.start as usize..self.end as usize
@@ -194,6 +202,12 @@ impl Placement {
     #[inline]
     fn row(&self, base: [usize; 3]) -> usize {
         base[0] * self.dims[1] + base[1]
+    }
+
+    /// The index of a base node.
+    #[inline]
+    fn index(&self, base: [usize; 3]) -> usize {
+        self.row(base) * self.dims[2] + base[2]
     }
 
     /// The nodes (x, y) steps from base node `first` (its index): the
@@ -318,20 +332,16 @@ fn spread_strands(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
             let d = [y[0] - x[0], y[1] - x[1], y[2] - x[2]];
             0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
         };
-        let mut before = None;
+        let mut before = 0.0;
         for i in a..b {
-            let after = (i + 1 < b).then(|| half(i));
-            let length = match (before, after) {
-                (Some(x), Some(y)) => x + y,
-                (Some(x), None) | (None, Some(x)) => 0.0 + x,
-                (None, None) => 0.0,
-            };
+            let after = if i + 1 < b { half(i) } else { 0.0 };
+            let length = before + after;
             before = after;
             let located = grid.locate(positions[i]);
             if let Some(place) = places.next() {
                 *place = match located {
                     Some((base, fraction)) => Place {
-                        first: (grid.row(base) * grid.dims[2] + base[2]) as u32,
+                        first: grid.index(base) as u32,
                         fraction,
                     },
                     None => Place {
@@ -353,7 +363,7 @@ fn spread_strands(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
             for next in [row, row + 1, row + grid.dims[1], row + grid.dims[1] + 1] {
                 spans[next].cover(base[2], base[2] + 2);
             }
-            let first = grid.row(base) * grid.dims[2] + base[2];
+            let first = grid.index(base);
             let [wx, wy, wz] = [weights(f[0]), weights(f[1]), weights(f[2])];
             for (dx, wx) in wx.into_iter().enumerate() {
                 for (dy, wy) in wy.into_iter().enumerate() {
@@ -403,7 +413,8 @@ struct Gather<'a> {
 }
 
 impl Gather<'_> {
-    /// The changes of ordered slots `first..` into `out`.
+    /// The changes of ordered slots `first..` into `out` (zero off the
+    /// grid).
     fn chunk(&self, first: usize, out: &mut [V3]) {
         #[cfg(target_arch = "x86_64")]
         if wide_lanes_available() {
@@ -432,9 +443,7 @@ impl Gather<'_> {
                 at += 1;
             }
             let i = offsets[order[at] as usize] + (slot - starts[at]);
-            if let Some(change) = self.change_at(slot, i) {
-                *dv = change;
-            }
+            *dv = self.change_at(slot, i).unwrap_or([0.0; 3]);
         }
     }
 
@@ -674,9 +683,7 @@ impl VolumeGrid {
         let sum = &mut first[0];
         for range in rest.iter() {
             for (all, mine) in sum.spans.iter_mut().zip(&range.spans) {
-                if mine.start < mine.end {
-                    all.cover(mine.start as usize, mine.end as usize);
-                }
+                all.join(*mine);
             }
         }
         let (spans, row_length) = (&sum.spans, grid.dims[2]);
@@ -725,7 +732,7 @@ impl VolumeGrid {
             scale,
         };
         let slots = self.ordered_starts.last().copied().unwrap_or(0);
-        self.ordered_dv.clear();
+        // Every slot is written below: resized, not cleared.
         self.ordered_dv.resize(slots, [0.0; 3]);
         self.ordered_dv
             .par_chunks_mut(GATHER_CHUNK)
