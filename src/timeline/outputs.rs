@@ -65,7 +65,7 @@ pub fn canonical(path: &Path) -> std::io::Result<PathBuf> {
 
 /// Why `path` cannot be written, found without writing it: it is a folder,
 /// a part of its folder is a file, or the folder that exists is not
-/// writable (tried by creating and removing a probe file).
+/// writable (see [`may_write_in`]).
 pub fn check_writable(path: &Path) -> Result<(), String> {
     if path.is_dir() {
         return Err("is a folder, not a file".into());
@@ -78,7 +78,7 @@ pub fn check_writable(path: &Path) -> Result<(), String> {
             dir
         };
         match std::fs::metadata(dir) {
-            Ok(m) if m.is_dir() => return probe(dir),
+            Ok(m) if m.is_dir() => return may_write_in(dir),
             Ok(_) => {
                 return Err(format!(
                     "'{}' is a file, not a folder",
@@ -91,22 +91,37 @@ pub fn check_writable(path: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn probe(dir: &Path) -> Result<(), String> {
-    let probe = dir.join(format!("{STAGED_PREFIX}{}.probe", std::process::id()));
-    match std::fs::OpenOptions::new()
+/// Whether a file can be created in `dir`, tried with an unnamed
+/// temporary file (`O_TMPFILE`): nothing is left behind, even by a bake
+/// killed during the check. Where the file system has no unnamed files
+/// (network and special ones), a named probe file is created and removed.
+fn may_write_in(dir: &Path) -> Result<(), String> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let cannot = |e: std::io::Error| {
+        format!(
+            "cannot write in '{}': {e}",
+            dir.display().to_string().escape_debug()
+        )
+    };
+    let unnamed = std::fs::OpenOptions::new()
         .write(true)
-        .create_new(true)
-        .open(&probe)
-    {
-        Ok(_) => {
+        .custom_flags(libc::O_TMPFILE)
+        .mode(0o600)
+        .open(dir);
+    match unnamed {
+        Ok(_) => Ok(()),
+        // Kernels and file systems without O_TMPFILE answer one of these.
+        Err(e) if matches!(e.raw_os_error(), Some(libc::EOPNOTSUPP | libc::EISDIR)) => {
+            let probe = dir.join(format!("{STAGED_PREFIX}{}.probe", std::process::id()));
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&probe)
+                .map_err(cannot)?;
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        Err(e) => Err(format!(
-            "cannot write in '{}': {}",
-            dir.display().to_string().escape_debug(),
-            e
-        )),
+        Err(e) => Err(cannot(e)),
     }
 }
 
