@@ -156,6 +156,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let report = pool.install(|| bench::run(&workload, args.steps, 2.0, threads))?;
     let shares = report.shares;
     let load = load_average();
+    let cpu = cpu_model();
     let dt = bench::step_dt();
     let per_simulated_second = report.seconds_per_simulated_second(dt);
     let projected_5s = args.preset.is_some().then_some(5.0 * per_simulated_second);
@@ -198,6 +199,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "projected_5s_seconds": projected_5s,
             "peak_memory_bytes": report.peak_memory,
             "load_average": load,
+            "cpu": cpu,
         });
         println!("{json}");
     } else {
@@ -247,14 +249,37 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             share(shares.export)
         );
         println!(
-            "peak memory {}, load average {}",
+            "peak memory {}, load average {}, CPU {}",
             report
                 .peak_memory
                 .map_or("?".to_string(), |b| format!("{:.0} MB", b as f64 / 1e6)),
-            load.map_or("?".to_string(), |l| format!("{l:.2}"))
+            load.map_or("?".to_string(), |l| format!("{l:.2}")),
+            cpu.as_deref().unwrap_or("?")
         );
     }
     Ok(())
+}
+
+/// The CPU's model name and instruction sets the solver dispatches on
+/// (Linux): a figure is only comparable with one from the same CPU (the
+/// same bench ran 1.6x slower on one virtual machine than on another).
+fn cpu_model() -> Option<String> {
+    let text = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let name = text
+        .lines()
+        .find_map(|l| l.strip_prefix("model name")?.split_once(':'))?
+        .1
+        .trim();
+    let mut widest = "baseline";
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            widest = "AVX-512";
+        } else if std::arch::is_x86_feature_detected!("avx2") {
+            widest = "AVX2";
+        }
+    }
+    Some(format!("{name} ({widest})"))
 }
 
 /// The one-minute load average (Linux), to judge the timing by.

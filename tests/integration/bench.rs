@@ -30,6 +30,16 @@ fn bench_reports_ns_per_vertex_iteration_as_json() {
     assert_eq!(report["strands"], 50);
     assert_eq!(report["vertices"], 16);
     assert_eq!(report["iterations"], 3);
+    // The CPU, as /proc/cpuinfo names it (x86-64 Linux has the field).
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    if cpuinfo.contains("model name") {
+        let cpu = report["cpu"].as_str().expect("cpu is named");
+        assert!(
+            cpuinfo.lines().any(|l| l.starts_with("model name")
+                && cpu.starts_with(l.split_once(':').unwrap().1.trim())),
+            "{cpu}"
+        );
+    }
 }
 
 #[test]
