@@ -48,3 +48,6 @@ for strands in $STRANDS; do
         printf "| %s | %s | %.1f | %.1f | %d MB | %s |\n" "$strands" "$threads" "$1" "$2" $(($4 / 1024)) "$3"
     done
 done
+# The figures hold for this CPU only (bench names it).
+echo
+sed -n 's/.*"cpu":"\([^"]*\)".*/CPU: \1/p' "$scratch/out"

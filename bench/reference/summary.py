@@ -44,3 +44,7 @@ for (name, iterations, threads), (wall, cpu, lo, hi, n) in sorted(best.items()):
     if not name.startswith("groombake") and threads in ours and min(ours[threads][:2]) > 0:
         ratio = f"{wall / ours[threads][0]:.1f}x / {cpu / ours[threads][1]:.1f}x"
     print(f"| {name} | {iterations} | {threads} | {n} | {wall:.1f} | {cpu:.1f} | {ratio} | {lo:.1f}-{hi:.1f} |")
+cpus = sorted({r["cpu"] for rs in runs.values() for r in rs if r.get("cpu")})
+if cpus:
+    print()
+    print(f"CPU (groombake's report): {', '.join(cpus)}")
