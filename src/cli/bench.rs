@@ -260,7 +260,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The CPU's model name and instruction sets the solver dispatches on
+/// The CPU's model name and the instructions the solver dispatches to
 /// (Linux): a figure is only comparable with one from the same CPU (the
 /// same bench ran 1.6x slower on one virtual machine than on another).
 fn cpu_model() -> Option<String> {
@@ -270,16 +270,10 @@ fn cpu_model() -> Option<String> {
         .find_map(|l| l.strip_prefix("model name")?.split_once(':'))?
         .1
         .trim();
-    let mut widest = "baseline";
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            widest = "AVX-512";
-        } else if std::arch::is_x86_feature_detected!("avx2") {
-            widest = "AVX2";
-        }
-    }
-    Some(format!("{name} ({widest})"))
+    Some(format!(
+        "{name} ({})",
+        groombake::sim::solver_instructions()
+    ))
 }
 
 /// The one-minute load average (Linux), to judge the timing by.

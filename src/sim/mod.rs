@@ -75,7 +75,7 @@ pub use parry3d::math::Pose;
 pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
 pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
-pub use step::Solver;
+pub use step::{solver_instructions, Solver};
 pub use volume::Volumetric;
 
 use serde::{Deserialize, Serialize};

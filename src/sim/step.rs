@@ -1110,6 +1110,19 @@ pub(super) fn wide_lanes_available() -> bool {
     }
 }
 
+/// The widest instructions the solver's lanes run in on this CPU: AVX-512
+/// (eight-wide), AVX2 (four-wide) or the baseline (what `bench` reports).
+pub fn solver_instructions() -> &'static str {
+    if wide_lanes_available() {
+        return "AVX-512";
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return "AVX2";
+    }
+    "baseline"
+}
+
 /// Up to eight strands' steps: the physical model's direct solve of all
 /// eight in lanes when they are active and of one vertex count (`ctx.wide`,
 /// bit-identical to `step_strand` on each); otherwise groups of four.
