@@ -1,8 +1,11 @@
 //! Solver cost per step (the workload of `groombake bench`): 1,000
 //! strands x 32 vertices, the physical model at its default iterations, on
-//! 1 and 2 threads, free, with hair-hair (alpha 5), with a ball head and
-//! with the mesh head; and the paper's model free at 5 iterations
-//! (samples/head.obj). `groombake bench` measures 10,000 strands and more.
+//! 1 and 2 threads, free, with hair-hair (alpha 5, pairwise and
+//! volumetric), with a ball head, with the mesh head (samples/head.obj),
+//! with the pillow, and as guides driving 5,000 render hairs interpolated
+//! and exported (Alembic, 24 frames per second: every 15th step); and the
+//! paper's model free at 5 iterations. `groombake bench` measures 10,000
+//! strands and more.
 
 // A benchmark harness: a failure to set up is a bug to see at once.
 #![allow(clippy::expect_used)]
@@ -54,6 +57,29 @@ fn step(c: &mut Criterion) {
             "mesh",
             Workload {
                 collider: HeadCollider::Mesh(head.into()),
+                ..plain.clone()
+            },
+        ),
+        (
+            "hair_hair_volumetric",
+            Workload {
+                hair_hair: Some(5.0),
+                volumetric: Some(groombake::sim::Volumetric::default()),
+                ..plain.clone()
+            },
+        ),
+        (
+            "mesh_pillow",
+            Workload {
+                collider: HeadCollider::Mesh(head.into()),
+                pillow: true,
+                ..plain.clone()
+            },
+        ),
+        (
+            "guides_5k_render",
+            Workload {
+                render: Some(5_000),
                 ..plain.clone()
             },
         ),
