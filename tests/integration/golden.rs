@@ -1,5 +1,7 @@
-//! Golden files: every sample's exports are byte-identical across runs and
-//! thread counts, and match the SHA-256s checked in under `tests/golden/`.
+//! Golden files: every sample's exports, and those of a hair-hair bake in
+//! each mode (no sample turns hair-hair on), are byte-identical across runs
+//! and thread counts, and match the SHA-256s checked in under
+//! `tests/golden/`.
 //!
 //! Bless after an intended change of output:
 //! `GROOMBAKE_BLESS=1 cargo test --test integration golden`
@@ -51,7 +53,13 @@ fn render(digests: &BTreeMap<String, String>) -> String {
 
 fn bake_sample(name: &str) {
     let dir = TestDir::new();
-    let timeline = sample(&format!("{name}.toml"));
+    bake_and_compare(name, &dir, &sample(&format!("{name}.toml")));
+}
+
+/// Bakes `timeline` into `dir` on 1 and 2 threads and compares the outputs
+/// with each other and with the golden file `name`. Returns the 1-thread
+/// run's digests.
+fn bake_and_compare(name: &str, dir: &TestDir, timeline: &Path) -> BTreeMap<String, String> {
     let timeline = timeline.to_str().unwrap();
     dir.run_ok(&["bake", timeline, "--out", "t1", "--threads", "1", "-q"]);
     dir.run_ok(&["bake", timeline, "--out", "t2", "--threads", "2", "-q"]);
@@ -72,7 +80,7 @@ fn bake_sample(name: &str) {
     if std::env::var_os("GROOMBAKE_BLESS").is_some() {
         std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
         std::fs::write(&golden, render(&one)).unwrap();
-        return;
+        return one;
     }
     let expected = std::fs::read_to_string(&golden).unwrap_or_else(|_| {
         panic!(
@@ -86,6 +94,7 @@ fn bake_sample(name: &str) {
         "{name}: outputs differ from {} (if intended, bless with GROOMBAKE_BLESS=1 cargo test --test integration golden)",
         golden.display()
     );
+    one
 }
 
 #[test]
@@ -116,4 +125,83 @@ fn golden_bangs() {
 #[test]
 fn golden_bed_head() {
     bake_sample("bed_head");
+}
+
+/// A swatch of 300 strands, 6 cm, 0.1 mm fibre radius (strands push apart
+/// within 0.2 mm), swept aside by a ball and released. `{hair_hair}` is
+/// the `[solver]` line that turns hair-hair on.
+const HAIR_HAIR_TIMELINE: &str = r#"seed = 1
+
+[groom]
+generate = { layout = "swatch", strands = 300, length = 0.06, segment_length = 0.004, swatch_width = 0.03, head_center = [0.0, 0.30, 0.0] }
+
+[solver]
+dt = "1/360"
+hair_radius = 1e-4
+{hair_hair}
+
+[[collider]]
+name = "comb"
+active = "listed"
+shape = { ball = { radius = 0.012 } }
+friction = 0.3
+motion = [
+  { t = 0.0, translation = [0.0, 0.26, 0.03] },
+  { t = 0.3, translation = [0.0, 0.26, -0.01] },
+]
+
+[[stage]]
+kind = "press"
+duration = 0.3
+colliders = ["comb"]
+
+[[stage]]
+kind = "release"
+duration = 0.1
+
+[[export]]
+path = "out/hair_hair_final.abc"
+what = "final"
+
+[[export]]
+path = "out/hair_hair_rest.usda"
+what = "rest"
+"#;
+
+/// The hair-hair golden of `mode` (its `[solver] hair_hair` line), after
+/// checking that hair-hair changes the bake: a golden that hair-hair did
+/// not reach would guard nothing of it.
+fn bake_hair_hair(name: &str, hair_hair: &str) {
+    let dir = TestDir::new();
+    let timeline = dir.path("hair_hair.toml");
+    std::fs::write(
+        &timeline,
+        HAIR_HAIR_TIMELINE.replace("{hair_hair}", hair_hair),
+    )
+    .unwrap();
+    let with = bake_and_compare(name, &dir, &timeline);
+    let without = dir.path("without.toml");
+    std::fs::write(&without, HAIR_HAIR_TIMELINE.replace("{hair_hair}", "")).unwrap();
+    dir.run_ok(&["bake", without.to_str().unwrap(), "--out", "off", "-q"]);
+    let off = digests(&dir.path("off"));
+    for file in ["out/hair_hair_final.abc", "out/hair_hair_rest.usda"] {
+        assert_ne!(
+            with.get(file),
+            off.get(file),
+            "{name}: {file} is the same without hair-hair"
+        );
+    }
+}
+
+#[test]
+fn golden_hair_hair_pairwise() {
+    bake_hair_hair("hair_hair_pairwise", "hair_hair = { strength = 5.0 }");
+}
+
+#[test]
+fn golden_hair_hair_volumetric() {
+    bake_hair_hair(
+        "hair_hair_volumetric",
+        r#"hair_hair = { mode = "volumetric" }"#,
+    );
 }
