@@ -3,11 +3,13 @@
 //! 0.09 m), optionally with hair-hair on and a head collider, stepped on a
 //! given thread pool.
 //!
-//! Phase shares come from ablation, not from clocks inside the solver (so
-//! timing cannot touch the results): the same workload is also run
+//! Phase shares come from ablation: the same workload is also run
 //! without hair-hair and without the collider, and each phase's share is
-//! the difference in CPU time per step. The rod solver's own phases
-//! (forces, constraints, bonds) are one share. With render hair the
+//! the difference in CPU time per step. The run without them has the
+//! solver's phase clock on (`Solver::set_phase_clock`: a clock read at
+//! each phase's end of a strand group's step; it reads and adds only, so
+//! it cannot touch a result), which splits the rod solver's share into
+//! forces, constraints and bonds. With render hair the
 //! simulated strands are guides: every frame (24 per second) the render
 //! hairs are interpolated from them with the groom crate's
 //! [`RenderHair`] (as a bake's animated export does) and written to an
@@ -18,7 +20,7 @@
 use crate::sim::parry3d::math::Vector;
 use crate::sim::parry3d::shape::SharedShape;
 use crate::sim::{
-    self, Collider, ColliderSet, Environment, Material, Model, Pose, SimError, Solver,
+    self, Collider, ColliderSet, Environment, Material, Model, PhaseTimes, Pose, SimError, Solver,
     SolverParameters, StrandSet,
 };
 use groom::interpolate::{InterpolationOptions, RenderHair};
@@ -116,6 +118,9 @@ pub struct Scene {
     steps: u64,
     /// Constraint solves of all strands so far (`StepReport::solves`).
     solves: u64,
+    /// The solver's phase times so far, when its phase clock is on
+    /// (`StepReport::phases`).
+    phases: PhaseTimes,
 }
 
 /// The render hair and its animated export.
@@ -220,6 +225,7 @@ impl Workload {
             delivery,
             steps: 0,
             solves: 0,
+            phases: PhaseTimes::default(),
         })
     }
 }
@@ -323,6 +329,9 @@ impl Scene {
         }
         self.steps += 1;
         self.solves += report.solves;
+        if let Some(phases) = report.phases {
+            self.phases += phases;
+        }
         if let Some(delivery) = self.delivery.as_mut() {
             if self.steps.is_multiple_of(delivery.every) {
                 delivery.frame(self.strands.positions())?;
@@ -351,6 +360,9 @@ pub struct Timing {
     /// Of that, CPU seconds interpolating the render hair and exporting it.
     pub interpolation_seconds: f64,
     pub export_seconds: f64,
+    /// The solver's phase times in the timed steps (zero unless its phase
+    /// clock was on).
+    pub phases: PhaseTimes,
 }
 
 impl Timing {
@@ -388,6 +400,7 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
     let steps = steps.next_multiple_of(period);
     let delivered = scene.delivery_cpu();
     let solves_before = scene.solves;
+    let phases_before = scene.phases;
     let cpu_start = process_cpu_ns();
     let start = Instant::now();
     for _ in 0..steps {
@@ -413,6 +426,11 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
         cpu_seconds,
         interpolation_seconds: interpolation - delivered.0,
         export_seconds: export - delivered.1,
+        phases: PhaseTimes {
+            forces: scene.phases.forces - phases_before.forces,
+            constraints: scene.phases.constraints - phases_before.constraints,
+            bonds: scene.phases.bonds - phases_before.bonds,
+        },
     })
 }
 
@@ -422,6 +440,12 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
 pub struct Shares {
     /// The rod solver: forces, constraints, bonds, velocities.
     pub solver: f64,
+    /// The solver's share split by its phase clock
+    /// (`Solver::set_phase_clock`): external forces, prediction,
+    /// velocities and commit; the constraint solve; the bonds.
+    pub forces: f64,
+    pub constraints: f64,
+    pub bonds: f64,
     pub collisions: Option<f64>,
     pub hair_hair: Option<f64>,
     pub interpolation: Option<f64>,
@@ -475,8 +499,11 @@ impl Report {
     }
 }
 
-/// Times `workload` on the current thread pool; with hair-hair or a
-/// collider, also the runs without them for the phase shares.
+/// Times `workload` on the current thread pool; then the same workload
+/// without hair-hair, colliders and render hair with the solver's phase
+/// clock on (the solver's share and its split into forces, constraints
+/// and bonds); with hair-hair or a collider, also the run with the
+/// collider alone (the collisions' share).
 pub fn run(
     workload: &Workload,
     steps: Option<usize>,
@@ -484,13 +511,27 @@ pub fn run(
     threads: usize,
 ) -> Result<Report, BenchError> {
     let timing = time(&mut workload.scene()?, steps, budget)?;
+    let with_collider = workload.collider != HeadCollider::None || workload.pillow;
+    let delivering = workload.render.is_some();
+    let hair_hair_on = workload.hair_hair.is_some() || workload.volumetric.is_some();
+    let time_phases = |w: Workload| -> Result<Timing, BenchError> {
+        let mut scene = w.scene()?;
+        scene.solver.set_phase_clock(true);
+        time(&mut scene, Some(timing.steps), budget)
+    };
+    let base_workload = Workload {
+        hair_hair: None,
+        volumetric: None,
+        collider: HeadCollider::None,
+        pillow: false,
+        render: None,
+        ..workload.clone()
+    };
+    let base_timing = time_phases(base_workload)?;
     let mut shares = Shares {
         solver: 1.0,
         ..Shares::default()
     };
-    let with_collider = workload.collider != HeadCollider::None || workload.pillow;
-    let delivering = workload.render.is_some();
-    let hair_hair_on = workload.hair_hair.is_some() || workload.volumetric.is_some();
     if hair_hair_on || with_collider || delivering {
         let cost = |w: Workload| -> Result<f64, BenchError> {
             Ok(time(&mut w.scene()?, Some(timing.steps), budget)?.cpu_per_step())
@@ -499,14 +540,7 @@ pub fn run(
         let interpolation = delivering.then_some(timing.interpolation_seconds / steps);
         let export = delivering.then_some(timing.export_seconds / steps);
         let total = timing.cpu_per_step() - interpolation.unwrap_or(0.0) - export.unwrap_or(0.0);
-        let base = cost(Workload {
-            hair_hair: None,
-            volumetric: None,
-            collider: HeadCollider::None,
-            pillow: false,
-            render: None,
-            ..workload.clone()
-        })?;
+        let base = base_timing.cpu_per_step();
         let collisions = if with_collider {
             let with = cost(Workload {
                 hair_hair: None,
@@ -530,7 +564,17 @@ pub fn run(
             hair_hair: hair_hair.map(|h| h / sum),
             interpolation: interpolation.map(|i| i / sum),
             export: export.map(|e| e / sum),
+            ..Shares::default()
         };
+    }
+    // The solver's share in the proportions of its phases' clocked times
+    // (the time between phases, a small remainder, goes with them).
+    let phases = base_timing.phases;
+    let clocked = (phases.forces + phases.constraints + phases.bonds) as f64;
+    if clocked > 0.0 {
+        shares.forces = shares.solver * phases.forces as f64 / clocked;
+        shares.constraints = shares.solver * phases.constraints as f64 / clocked;
+        shares.bonds = shares.solver * phases.bonds as f64 / clocked;
     }
     Ok(Report {
         workload: workload.clone(),
@@ -653,6 +697,13 @@ mod tests {
             + shares.interpolation.unwrap_or(0.0)
             + shares.export.unwrap_or(0.0);
         assert!((sum - 1.0).abs() < 1e-9, "{sum}");
+        // The solver's share, split by its phase clock.
+        let split = shares.forces + shares.constraints + shares.bonds;
+        assert!((split - shares.solver).abs() < 1e-9, "{shares:?}");
+        assert!(
+            shares.forces > 0.0 && shares.constraints > 0.0 && shares.bonds > 0.0,
+            "{shares:?}"
+        );
         let prefix = format!("groombake-bench-{}-", std::process::id());
         let left: Vec<_> = std::fs::read_dir(std::env::temp_dir())
             .unwrap()

@@ -190,6 +190,9 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 .map(|c| c / report.solves_per_strand_step().max(1.0)),
             "shares": {
                 "solver": shares.solver,
+                "forces": shares.forces,
+                "constraints": shares.constraints,
+                "bonds": shares.bonds,
                 "collisions": shares.collisions,
                 "hair_hair": shares.hair_hair,
                 "interpolation": shares.interpolation,
@@ -240,9 +243,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         );
         let share = |s: Option<f64>| s.map_or("-".to_string(), |s| format!("{:.1} %", s * 100.0));
         println!(
-            "shares of CPU time (by ablation): solver (forces, constraints, bonds) {}, \
-             collisions {}, hair-hair {}, interpolation {}, export {}",
+            "shares of CPU time (by ablation and the solver's phase clock): solver {} \
+             (forces {}, constraints {}, bonds {}), collisions {}, hair-hair {}, \
+             interpolation {}, export {}",
             share(Some(shares.solver)),
+            share(Some(shares.forces)),
+            share(Some(shares.constraints)),
+            share(Some(shares.bonds)),
             share(shares.collisions),
             share(shares.hair_hair),
             share(shares.interpolation),

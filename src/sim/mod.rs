@@ -520,4 +520,41 @@ pub struct StepReport {
     /// `SolverParameters::tolerance`, plus one after a contact moved it),
     /// the paper model's sweeps.
     pub solves: u64,
+    /// The time the strands' steps spent in each phase, summed over the
+    /// threads (when `Solver::set_phase_clock` is on).
+    pub phases: Option<PhaseTimes>,
+}
+
+/// Nanoseconds the strands' steps spent in each phase, summed over the
+/// threads (the hair-hair grid and the collider preparation run before
+/// the strands' steps and are not in it).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PhaseTimes {
+    /// External forces and the prediction (ii), the velocities (vi) and
+    /// the commit.
+    pub forces: u64,
+    /// The constraint solve (iv): the physical model's Newton iterations
+    /// or the paper model's sweeps, with their collision projections,
+    /// Follow-The-Leader and the final collision pass.
+    pub constraints: u64,
+    /// The side-chain bonds: rate changes and the rest shape (iii)-(15),
+    /// and the bond update (v)-(17).
+    pub bonds: u64,
+}
+
+impl std::ops::Add for PhaseTimes {
+    type Output = PhaseTimes;
+    fn add(self, o: PhaseTimes) -> PhaseTimes {
+        PhaseTimes {
+            forces: self.forces.saturating_add(o.forces),
+            constraints: self.constraints.saturating_add(o.constraints),
+            bonds: self.bonds.saturating_add(o.bonds),
+        }
+    }
+}
+
+impl std::ops::AddAssign for PhaseTimes {
+    fn add_assign(&mut self, o: PhaseTimes) {
+        *self = *self + o;
+    }
 }

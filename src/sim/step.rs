@@ -1,9 +1,18 @@
-//! One step of 000 Fig. 1 (METHOD D), fused per strand: predict (external
-//! forces, bond-rate changes), rest shape from the bonds (15), `n`
-//! iterations of stretch/shear, bend/twist and collisions, the
-//! inextensibility pass, bond update (17), velocities from positions.
+//! One step of 000 Fig. 1 (METHOD D), fused per strand (or per group of
+//! strands in SIMD lanes), in named phases:
+//! 1. `predict` (forces): external forces, predicted positions and frames;
+//! 2. `rest_shape` (bonds): bond-rate changes, rest shape from the bonds (15);
+//! 3. the constraint solve (constraints): `n` iterations of stretch/shear,
+//!    bend/twist and collisions (the physical model's Newton iterations),
+//!    then `end_constraints`: the inextensibility pass, the final collisions;
+//! 4. `velocities` (forces): velocities from positions, the finite check;
+//! 5. `update_bonds` (bonds): the bond update (17);
+//! 6. `commit` (forces).
+//!
 //! Strands run in parallel; each works on a cache-resident copy of its
-//! state and commits it only if it is finite.
+//! state and commits it only if it is finite. With the phase clock on
+//! (`Solver::set_phase_clock`) each phase's time is added up for the
+//! step's report.
 
 use super::bonds::{reform, rest_darboux};
 use super::colliders::{project, project_contact, PreparedCollider};
@@ -18,8 +27,8 @@ use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
 use super::volume::VolumeGrid;
 use super::{
-    Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, SimError, SolverParameters,
-    StepReport, StrandSet,
+    Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, PhaseTimes, SimError,
+    SolverParameters, StepReport, StrandSet,
 };
 use rayon::prelude::*;
 
@@ -32,6 +41,8 @@ pub struct Solver {
     grid: EdgeGrid,
     volume: VolumeGrid,
     dispatch: Dispatch,
+    /// Time the phases of each step (`StepReport::phases`).
+    phase_clock: bool,
 }
 
 /// Strands per task of the parallel step: a fixed count (so the split does
@@ -136,6 +147,35 @@ struct Context<'a> {
     /// The CPU has AVX-512: the per-strand phases use it too.
     avx512: bool,
     physical: Option<RodMaterial>,
+    /// Time the phases (`Solver::set_phase_clock`).
+    phase_clock: bool,
+}
+
+/// The clock of the phases of a strand's or a group's step, when the
+/// solver times them: a reading at each phase's end, the time since the
+/// last reading added to that phase. (Timing reads a clock and adds to
+/// counters only, so it cannot change a result; off, it reads nothing.)
+struct PhaseClock {
+    last: Option<std::time::Instant>,
+}
+
+impl PhaseClock {
+    fn start(on: bool) -> PhaseClock {
+        PhaseClock {
+            last: on.then(std::time::Instant::now),
+        }
+    }
+
+    /// Adds the time since the last reading to `phase`.
+    #[inline]
+    fn lap(&mut self, phase: &mut u64) {
+        if let Some(last) = self.last {
+            let now = std::time::Instant::now();
+            let elapsed = u64::try_from(now.duration_since(last).as_nanos()).unwrap_or(u64::MAX);
+            *phase = phase.saturating_add(elapsed);
+            self.last = Some(now);
+        }
+    }
 }
 
 /// Per-thread working copy of one strand.
@@ -172,6 +212,9 @@ struct Work {
     /// Constraint solves (physical model) or sweeps (paper model) of the
     /// strands this working copy stepped, since the step began.
     solves: u64,
+    /// The phases' times of the strands this working copy stepped, since
+    /// the step began (when the solver times them).
+    phases: PhaseTimes,
 }
 
 impl Work {
@@ -216,7 +259,14 @@ impl Solver {
             grid: EdgeGrid::default(),
             volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
+            phase_clock: false,
         })
+    }
+
+    /// Whether each step times its phases (`StepReport::phases`), for
+    /// `bench`; off by default. The results are the same either way.
+    pub fn set_phase_clock(&mut self, on: bool) {
+        self.phase_clock = on;
     }
 
     pub fn parameters(&self) -> &SolverParameters {
@@ -299,6 +349,7 @@ impl Solver {
             volume,
             dispatch,
             simd,
+            phase_clock,
             ..
         } = self;
         dispatch.active.clear();
@@ -387,6 +438,7 @@ impl Solver {
                     density: strands.material.density as f64,
                 }),
             },
+            phase_clock: *phase_clock,
         };
         let mut views = recycle(std::mem::take(&mut dispatch.views));
         split_strands(strands, active, &mut views);
@@ -415,6 +467,7 @@ impl Solver {
             block.failed.clear();
             for work in &mut block.works {
                 work.solves = 0;
+                work.phases = PhaseTimes::default();
             }
         }
         let scratch = &dispatch.scratch;
@@ -460,10 +513,17 @@ impl Solver {
             .iter()
             .flat_map(|b| b.works.iter().map(|w| w.solves))
             .sum();
+        let phases = phase_clock.then(|| {
+            blocks
+                .iter()
+                .flat_map(|b| b.works.iter().map(|w| w.phases))
+                .fold(PhaseTimes::default(), |sum, p| sum + p)
+        });
         Ok(StepReport {
             frozen_total: strands.frozen.iter().filter(|f| **f).count(),
             contained: failed,
             solves,
+            phases,
         })
     }
 }
@@ -541,29 +601,28 @@ impl StrandMut<'_> {
     }
 }
 
-/// Fills the working copy: (ii) external forces and predicted positions
-/// and frames, bond-rate changes, (iii) rest shape from the bonds, the
-/// constraint coefficients.
-fn prepare(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+/// (ii) of the step, the "forces" phase: external forces and the
+/// predicted positions and frames in the working copy.
+fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     #[cfg(target_arch = "x86_64")]
     if ctx.avx512 {
         // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        unsafe { prepare_avx512(ctx, s, work) };
+        unsafe { predict_avx512(ctx, s, work) };
         return;
     }
-    prepare_strand(ctx, s, work);
+    predict_strand(ctx, s, work);
 }
 
-/// `prepare` in the CPU's widest instructions (the same operations, no
+/// `predict` in the CPU's widest instructions (the same operations, no
 /// FMA: the same bits; the compiler vectorises more of the loops).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn prepare_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    prepare_strand(ctx, s, work);
+fn predict_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    predict_strand(ctx, s, work);
 }
 
 #[inline(always)]
-fn prepare_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
     let m = n - 1;
     work.resize(n);
@@ -655,14 +714,40 @@ fn prepare_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                 StretchCoefficients::new(work.w[e], work.w[e + 1], work.w_q[e], edge.rest_length);
         }
     }
+    if ctx.physical.is_none() {
+        // The paper model's sweep coefficients.
+        for j in 1..m {
+            work.bend[j] =
+                bend_coefficients(work.w_q[j - 1], work.w_q[j], s.joints[j].stiffness_prime);
+        }
+    }
+}
 
-    // Bond-rate changes and (iii) the rest shape from the bonds (15).
+/// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
+/// shape from the bonds (15), after `predict` (which fills the old frames
+/// and, with a blower, the drying rates).
+fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+        unsafe { rest_shape_avx512(ctx, s, work) };
+        return;
+    }
+    rest_shape_strand(ctx, s, work);
+}
+
+/// `rest_shape` in the CPU's widest instructions (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn rest_shape_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    rest_shape_strand(ctx, s, work);
+}
+
+#[inline(always)]
+fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    let m = s.positions.len() - 1;
     for j in 1..m {
         let joint = &s.joints[j];
-        if ctx.physical.is_none() {
-            // The paper model's sweep coefficients.
-            work.bend[j] = bend_coefficients(work.w_q[j - 1], work.w_q[j], joint.stiffness_prime);
-        }
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
         let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
         let mut effective = joint.rates;
@@ -822,23 +907,37 @@ impl Work {
 
 /// One strand's step. Returns false (and commits nothing) when its new
 /// state is not finite.
-fn step_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work) -> bool {
+fn step_strand(ctx: &Context<'_>, mut s: StrandMut<'_>, work: &mut Work) -> bool {
     let n = s.positions.len();
     if n < 2 {
         return true;
     }
-    prepare(ctx, &s, work);
+    let mut clock = PhaseClock::start(ctx.phase_clock);
+    predict(ctx, &s, work);
+    clock.lap(&mut work.phases.forces);
+    rest_shape(ctx, &s, work);
+    clock.lap(&mut work.phases.bonds);
     if let Some(material) = ctx.physical {
         work.solve_direct(ctx, material, &s);
-        return finish(ctx, s, work, false);
+    } else {
+        // (iv) Constraint iterations (and collisions).
+        work.solves += u64::from(ctx.iterations);
+        for _ in 0..ctx.iterations {
+            work.sweep(n - 1);
+            work.collide(ctx, n);
+        }
     }
-    // (iv) Constraint iterations (and collisions).
-    work.solves += u64::from(ctx.iterations);
-    for _ in 0..ctx.iterations {
-        work.sweep(n - 1);
-        work.collide(ctx, n);
+    end_constraints(ctx, work, n, false);
+    clock.lap(&mut work.phases.constraints);
+    let finite = velocities(ctx, work, n);
+    clock.lap(&mut work.phases.forces);
+    if finite {
+        update_bonds(ctx, &mut s, work);
+        clock.lap(&mut work.phases.bonds);
+        commit(ctx, s, work);
+        clock.lap(&mut work.phases.forces);
     }
-    finish(ctx, s, work, false)
+    finite
 }
 
 impl Work {
@@ -1065,8 +1164,20 @@ fn step_group_direct<T: Real>(
     let n = strands[0].positions.len();
     let m = n - 1;
     let colliding = !ctx.colliders.is_empty();
+    let lanes = T::WIDTH;
+    // The phases' times go to the first lane's working copy (summed over
+    // all of them at the end of the step).
+    let mut clock = PhaseClock::start(ctx.phase_clock);
+    let mut phases = PhaseTimes::default();
     for (s, work) in strands.iter().zip(works.iter_mut()) {
-        prepare(ctx, s, work);
+        predict(ctx, s, work);
+    }
+    clock.lap(&mut phases.forces);
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        rest_shape(ctx, s, work);
+    }
+    clock.lap(&mut phases.bonds);
+    for work in works.iter_mut().take(lanes) {
         work.contact_normals[..n].fill([0.0; 3]);
         if colliding {
             work.begin_contacts(ctx, n);
@@ -1089,11 +1200,47 @@ fn step_group_direct<T: Real>(
         });
         direct.end(&mut out[..T::WIDTH]);
     }
-    for (s, work) in strands.iter_mut().zip(works.iter_mut()) {
-        let index = s.index;
-        if !finish(ctx, s.reborrow(), work, false) {
-            failed.push(index);
+    for work in works.iter_mut().take(lanes) {
+        end_constraints(ctx, work, n, false);
+    }
+    clock.lap(&mut phases.constraints);
+    finish_group(ctx, strands, works, failed, clock, phases);
+}
+
+/// The end of a group's step, each strand as in `step_strand`: velocities,
+/// then, for the strands whose state is finite, the bond update and the
+/// commit; the others go to `failed`. Adds the phases' times (from
+/// `clock`, started with the step) to the first working copy.
+fn finish_group(
+    ctx: &Context<'_>,
+    strands: &mut [StrandMut<'_>],
+    works: &mut [Work],
+    failed: &mut Vec<usize>,
+    mut clock: PhaseClock,
+    mut phases: PhaseTimes,
+) {
+    let n = strands[0].positions.len();
+    let mut finite = [false; WIDE];
+    for (ok, work) in finite.iter_mut().zip(works.iter_mut()).take(strands.len()) {
+        *ok = velocities(ctx, work, n);
+    }
+    clock.lap(&mut phases.forces);
+    for ((s, work), ok) in strands.iter_mut().zip(works.iter()).zip(finite) {
+        if ok {
+            update_bonds(ctx, s, work);
         }
+    }
+    clock.lap(&mut phases.bonds);
+    for ((s, work), ok) in strands.iter_mut().zip(works.iter()).zip(finite) {
+        if ok {
+            commit(ctx, s.reborrow(), work);
+        } else {
+            failed.push(s.index);
+        }
+    }
+    clock.lap(&mut phases.forces);
+    if let Some(first) = works.first_mut() {
+        first.phases += phases;
     }
 }
 
@@ -1183,10 +1330,17 @@ fn step_group(
         step_group_direct(ctx, material, strands, works, &mut group.direct, failed);
         return;
     }
+    let mut clock = PhaseClock::start(ctx.phase_clock);
+    let mut phases = PhaseTimes::default();
     for (s, work) in strands.iter().zip(works.iter_mut()) {
-        prepare(ctx, s, work);
+        predict(ctx, s, work);
         work.solves += u64::from(ctx.iterations);
     }
+    clock.lap(&mut phases.forces);
+    for (s, work) in strands.iter().zip(works.iter_mut()) {
+        rest_shape(ctx, s, work);
+    }
+    clock.lap(&mut phases.bonds);
     let m = n - 1;
     group.load_constants(lane_inputs(works, n), n);
     let colliding = !ctx.colliders.is_empty();
@@ -1204,16 +1358,15 @@ fn step_group(
     if ftl_done {
         group.follow_the_leader();
     }
-    for (lane, (s, work)) in strands.iter_mut().zip(works.iter_mut()).enumerate() {
+    for (lane, work) in works.iter_mut().enumerate().take(strands.len()) {
         group.store(lane, &mut work.p[..n], &mut work.q[..m]);
         if ftl_done {
             group.store_corrections(lane, &mut work.corrections[..n]);
         }
-        let index = s.index;
-        if !finish(ctx, s.reborrow(), work, ftl_done) {
-            failed.push(index);
-        }
+        end_constraints(ctx, work, n, ftl_done);
     }
+    clock.lap(&mut phases.constraints);
+    finish_group(ctx, strands, works, failed, clock, phases);
 }
 
 fn lane_inputs(works: &[Work], n: usize) -> [LaneInput<'_>; LANES] {
@@ -1229,33 +1382,12 @@ fn lane_inputs(works: &[Work], n: usize) -> [LaneInput<'_>; LANES] {
     })
 }
 
-/// After the iterations: inextensibility, final collisions, velocities,
-/// bond update (17); commits the strand if its new state is finite.
-/// `ftl_done`: the inextensibility pass already ran (in lanes).
-fn finish(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        return unsafe { finish_avx512(ctx, s, work, ftl_done) };
-    }
-    finish_strand(ctx, s, work, ftl_done)
-}
-
-/// `finish` in the CPU's widest instructions (as `prepare_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn finish_avx512(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
-    finish_strand(ctx, s, work, ftl_done)
-}
-
-#[inline(always)]
-fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done: bool) -> bool {
-    let n = s.positions.len();
+/// The end of the "constraints" phase: the inextensibility pass (paper
+/// model, unless it already ran in lanes: `ftl_done`) and the final
+/// collision pass, so no vertex ends inside a collider.
+fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool) {
     let m = n - 1;
-    let dt = ctx.dt;
-    let colliding = !ctx.colliders.is_empty();
-    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
-    if ftl.is_some() && !ftl_done {
+    if ctx.ftl.is_some() && ctx.physical.is_none() && !ftl_done {
         follow_the_leader(
             &mut work.p[..n],
             &work.w[..n],
@@ -1263,18 +1395,39 @@ fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done:
             &mut work.corrections[..n],
         );
     }
-    if colliding {
-        // Last, so no vertex ends inside a collider.
+    if !ctx.colliders.is_empty() {
         for i in 1..n {
             if work.w[i] > 0.0 {
-                work.p[i] = project(ctx.colliders, work.p[i], None, ctx.radius, dt);
+                work.p[i] = project(ctx.colliders, work.p[i], None, ctx.radius, ctx.dt);
             }
         }
     }
+}
 
-    // (vi) Velocities from the position change, and Follow-The-Leader's
-    // correction of them (DFTL), kept apart: the real velocity is what the
-    // state reports.
+/// (vi) Velocities from the position change; returns whether the new
+/// state is finite (the strand is committed only then).
+fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+        return unsafe { velocities_avx512(ctx, work, n) };
+    }
+    velocities_strand(ctx, work, n)
+}
+
+/// `velocities` in the CPU's widest instructions (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn velocities_avx512(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
+    velocities_strand(ctx, work, n)
+}
+
+#[inline(always)]
+fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
+    let m = n - 1;
+    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
+    // Follow-The-Leader's correction of the velocities (DFTL) is kept
+    // apart: the real velocity is what the state reports.
     for i in 0..n {
         work.v[i] = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
         work.dv[i] = [0.0; 3];
@@ -1303,11 +1456,31 @@ fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done:
         let delta = math::qmul(change, math::conj(q_old));
         work.omega[e] = math::scale(math::imag(delta), 2.0 * sign * ctx.inv_dt);
     }
-    if !all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m]) {
-        return false;
-    }
+    all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m])
+}
 
-    // (v) Bond update (17) with the shape after the projection; commit.
+/// (v) of the step, the end of the "bonds" phase: the bond update (17)
+/// with the shape after the projection.
+fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+        unsafe { update_bonds_avx512(s, work) };
+        return;
+    }
+    update_bonds_strand(s, work);
+}
+
+/// `update_bonds` in the CPU's widest instructions (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn update_bonds_avx512(s: &mut StrandMut<'_>, work: &Work) {
+    update_bonds_strand(s, work);
+}
+
+#[inline(always)]
+fn update_bonds_strand(s: &mut StrandMut<'_>, work: &Work) {
+    let m = s.positions.len() - 1;
     for j in 1..m {
         let db = work.db[j];
         let joint = &mut s.joints[j];
@@ -1328,10 +1501,17 @@ fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done:
             joint.rates = rates;
         }
     }
+}
+
+/// Commits the strand's new positions, velocities and frames.
+fn commit(ctx: &Context<'_>, s: StrandMut<'_>, work: &Work) {
+    let n = s.positions.len();
+    let m = n - 1;
     s.positions.copy_from_slice(&work.p[..n]);
     s.velocities.copy_from_slice(&work.v[..n]);
     // The physical model has none: they stay zero, so they are written only
     // when not already all +0 (a write would dirty memory for nothing).
+    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
     let unchanged = ftl.is_none()
         && s.velocity_corrections
             .iter()
@@ -1343,5 +1523,4 @@ fn finish_strand(ctx: &Context<'_>, s: StrandMut<'_>, work: &mut Work, ftl_done:
         s.edges[e].rotation = work.q[e];
         s.edges[e].angular_velocity = work.omega[e];
     }
-    true
 }

@@ -832,6 +832,8 @@ fn assert_groups_match_strands_alone(
         ..SolverParameters::default()
     };
     let mut grouped = Solver::new(parameters).unwrap();
+    // The grouped run also times its phases: the clock changes no result.
+    grouped.set_phase_clock(true);
     let mut alone = Solver::new(parameters).unwrap().without_simd();
     let colliders = head_and_pillow();
     let env = Environment {
@@ -847,12 +849,20 @@ fn assert_groups_match_strands_alone(
         ..Environment::default()
     };
     let mut solves = 0;
+    let mut phases = PhaseTimes::default();
     for _ in 0..steps {
         let report = grouped.step(&mut grouped_set, &colliders, &env).unwrap();
         solves += report.solves;
+        phases += report.phases.expect("the grouped run times its phases");
         let alone_report = alone.step(&mut alone_set, &colliders, &env).unwrap();
         assert_eq!(report.solves, alone_report.solves);
+        assert_eq!(alone_report.phases, None, "off by default");
     }
+    // Every phase took time (nanoseconds summed over the steps).
+    assert!(
+        phases.forces > 0 && phases.constraints > 0 && phases.bonds > 0,
+        "{phases:?}"
+    );
     assert!(grouped_set.positions() == alone_set.positions());
     assert!(grouped_set.edge_rotations() == alone_set.edge_rotations());
     for kind in BondKind::ALL {

@@ -30,6 +30,16 @@ fn bench_reports_ns_per_vertex_iteration_as_json() {
     assert_eq!(report["strands"], 50);
     assert_eq!(report["vertices"], 16);
     assert_eq!(report["iterations"], 3);
+    // The solver's share split by its phase clock: each phase took some
+    // time, and together they are the solver's share (here all of it).
+    let shares = &report["shares"];
+    let share = |key: &str| shares[key].as_f64().unwrap_or(f64::NAN);
+    for phase in ["forces", "constraints", "bonds"] {
+        assert!(share(phase) > 0.0, "{phase}: {shares}");
+    }
+    let split = share("forces") + share("constraints") + share("bonds");
+    assert!((split - share("solver")).abs() < 1e-9, "{shares}");
+    assert_eq!(share("solver"), 1.0, "{shares}");
     // The CPU, as /proc/cpuinfo names it (x86-64 Linux has the field).
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
     if cpuinfo.contains("model name") {
