@@ -215,6 +215,9 @@ struct Work {
     /// The phases' times of the strands this working copy stepped, since
     /// the step began (when the solver times them).
     phases: PhaseTimes,
+    /// No bond rate of the strand changes this step (`rest_shape`): the
+    /// bond update has nothing to do.
+    bonds_unchanged: bool,
 }
 
 impl Work {
@@ -745,7 +748,9 @@ fn rest_shape_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
 
 #[inline(always)]
 fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    const NEGATIVE_ZERO: u32 = 0x8000_0000;
     let m = s.positions.len() - 1;
+    work.bonds_unchanged = true;
     for j in 1..m {
         let joint = &s.joints[j];
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
@@ -777,6 +782,12 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                 effective[k] = b.min(target);
             }
         }
+        // The bond update (17) changes nothing when every rate change is
+        // +0 (no re-forming, and `b + 0` is `b` except for -0 and NaN).
+        work.bonds_unchanged &= db
+            .iter()
+            .zip(&joint.rates)
+            .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan());
         work.db[j] = db;
         work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
     }
@@ -1480,6 +1491,9 @@ fn update_bonds_avx512(s: &mut StrandMut<'_>, work: &Work) {
 
 #[inline(always)]
 fn update_bonds_strand(s: &mut StrandMut<'_>, work: &Work) {
+    if work.bonds_unchanged {
+        return;
+    }
     let m = s.positions.len() - 1;
     for j in 1..m {
         let db = work.db[j];
