@@ -951,8 +951,12 @@ impl<T: Real> Direct<T> {
             // over several iterations and steps instead of overshooting.
             let turn =
                 (dtheta[0] * dtheta[0] + dtheta[1] * dtheta[1] + dtheta[2] * dtheta[2]).sqrt();
-            let scale = max_turn / turn;
-            dtheta = build(|r| T::gt_select(turn, max_turn, dtheta[r] * scale, dtheta[r]));
+            // (The division only where a lane turns too far: the select
+            // would keep `dtheta` in every other lane.)
+            if (0..T::WIDTH).any(|i| turn.lane(i) > MAX_TURN) {
+                let scale = max_turn / turn;
+                dtheta = build(|r| T::gt_select(turn, max_turn, dtheta[r] * scale, dtheta[r]));
+            }
             let q = self.q[e];
             // q += 1/2 (dtheta, 0) q, renormalised.
             let s = qmul([dtheta[0], dtheta[1], dtheta[2], zero], q);
