@@ -4,8 +4,9 @@
 # 1 and 2 threads, free hair (no hair-hair, no collider), dt 1/360, the
 # model's default iterations and Newton tolerance. Prints a markdown table:
 # wall and CPU time per vertex-step (the minimum of REPEATS runs), peak
-# resident memory from
-# /usr/bin/time -v, and the load average during the runs. Not run by CI.
+# resident memory (MiB) after the timed steps (bench's `peak_memory_bytes`,
+# read before its second, phase-clocked run), and the load average during
+# the runs. Not run by CI.
 #
 # Usage: bench/scaling.sh [GROOMBAKE]   (default: target/release/groombake;
 # build it with `cargo build --release` first)
@@ -32,20 +33,19 @@ for strands in $STRANDS; do
         run=0
         while [ $run -lt "$REPEATS" ]; do
             # shellcheck disable=SC2086
-            /usr/bin/time -v "$groombake" bench --strands "$strands" --vertices 32 \
-                --threads "$threads" --steps "$steps" --json $EXTRA \
-                >"$scratch/out" 2>"$scratch/time"
-            # One line per run: wall ns, CPU ns, load average, peak kB.
-            for key in ns_per_vertex_step cpu_ns_per_vertex_step load_average; do
+            "$groombake" bench --strands "$strands" --vertices 32 \
+                --threads "$threads" --steps "$steps" --json $EXTRA >"$scratch/out"
+            # One line per run: wall ns, CPU ns, load average, peak bytes.
+            for key in ns_per_vertex_step cpu_ns_per_vertex_step load_average peak_memory_bytes; do
                 sed "s/.*\"$key\":\([0-9.]*\).*/\1/" "$scratch/out" | tr '\n' ' '
             done >>"$scratch/runs"
-            sed -n 's/.*Maximum resident set size (kbytes): //p' "$scratch/time" >>"$scratch/runs"
+            echo >>"$scratch/runs"
             run=$((run + 1))
         done
         set -- $(awk 'NR == 1 { w = $1; c = $2; lo = $3; hi = $3; m = $4 }
             { if ($1 < w) w = $1; if ($2 < c) c = $2; if ($3 < lo) lo = $3; if ($3 > hi) hi = $3; if ($4 > m) m = $4 }
             END { print w, c, lo "-" hi, m }' "$scratch/runs")
-        printf "| %s | %s | %.1f | %.1f | %d MB | %s |\n" "$strands" "$threads" "$1" "$2" $(($4 / 1024)) "$3"
+        printf "| %s | %s | %.1f | %.1f | %d MB | %s |\n" "$strands" "$threads" "$1" "$2" $(($4 / 1048576)) "$3"
     done
 done
 # The figures hold for this CPU only (bench names it).

@@ -511,6 +511,8 @@ pub fn run(
     threads: usize,
 ) -> Result<Report, BenchError> {
     let timing = time(&mut workload.scene()?, steps, budget)?;
+    // Before the runs below, which only add to it.
+    let peak = peak_memory();
     let with_collider = workload.collider != HeadCollider::None || workload.pillow;
     let delivering = workload.render.is_some();
     let hair_hair_on = workload.hair_hair.is_some() || workload.volumetric.is_some();
@@ -581,7 +583,7 @@ pub fn run(
         threads,
         timing,
         shares,
-        peak_memory: peak_memory(),
+        peak_memory: peak,
     })
 }
 
