@@ -426,11 +426,7 @@ pub fn time(scene: &mut Scene, steps: Option<usize>, budget: f64) -> Result<Timi
         cpu_seconds,
         interpolation_seconds: interpolation - delivered.0,
         export_seconds: export - delivered.1,
-        phases: PhaseTimes {
-            forces: scene.phases.forces - phases_before.forces,
-            constraints: scene.phases.constraints - phases_before.constraints,
-            bonds: scene.phases.bonds - phases_before.bonds,
-        },
+        phases: scene.phases - phases_before,
     })
 }
 
@@ -516,20 +512,19 @@ pub fn run(
     let with_collider = workload.collider != HeadCollider::None || workload.pillow;
     let delivering = workload.render.is_some();
     let hair_hair_on = workload.hair_hair.is_some() || workload.volumetric.is_some();
-    let time_phases = |w: Workload| -> Result<Timing, BenchError> {
-        let mut scene = w.scene()?;
+    let base_timing = {
+        let mut scene = Workload {
+            hair_hair: None,
+            volumetric: None,
+            collider: HeadCollider::None,
+            pillow: false,
+            render: None,
+            ..workload.clone()
+        }
+        .scene()?;
         scene.solver.set_phase_clock(true);
-        time(&mut scene, Some(timing.steps), budget)
+        time(&mut scene, Some(timing.steps), budget)?
     };
-    let base_workload = Workload {
-        hair_hair: None,
-        volumetric: None,
-        collider: HeadCollider::None,
-        pillow: false,
-        render: None,
-        ..workload.clone()
-    };
-    let base_timing = time_phases(base_workload)?;
     let mut shares = Shares {
         solver: 1.0,
         ..Shares::default()

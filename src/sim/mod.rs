@@ -553,6 +553,19 @@ impl std::ops::Add for PhaseTimes {
     }
 }
 
+impl std::ops::Sub for PhaseTimes {
+    type Output = PhaseTimes;
+    /// The time between two readings of the totals (`saturating`, as the
+    /// sums are).
+    fn sub(self, o: PhaseTimes) -> PhaseTimes {
+        PhaseTimes {
+            forces: self.forces.saturating_sub(o.forces),
+            constraints: self.constraints.saturating_sub(o.constraints),
+            bonds: self.bonds.saturating_sub(o.bonds),
+        }
+    }
+}
+
 impl std::ops::AddAssign for PhaseTimes {
     fn add_assign(&mut self, o: PhaseTimes) {
         *self = *self + o;
