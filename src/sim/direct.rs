@@ -153,7 +153,9 @@ pub(super) fn edge_flexibility<T: Real>(
     let (youngs, shear) = material;
     let r = T::splat(0.5) * (r0 + r1);
     let r2 = r * r;
-    let inertia = T::splat(std::f64::consts::PI) * (r2 * r2) / T::splat(4.0);
+    // A quarter by a multiplication: the same bits as dividing by 4 (a
+    // power of two), without a division.
+    let inertia = T::splat(std::f64::consts::PI) * (r2 * r2) * T::splat(0.25);
     let four = T::splat(4.0);
     let bend = length / (four * youngs * factor * inertia);
     let twist = length / (four * shear * factor * T::splat(2.0) * inertia);
@@ -268,10 +270,10 @@ pub struct Direct<T> {
     constants: Vec<Constants<T>>,
     factors: Vec<Factor<T>>,
     root: [T; 4],
-    /// `begin`'s per-edge scratch, and per vertex its radius and cuticle
-    /// factor.
+    /// `begin`'s per-edge scratch, and per vertex its radius, cuticle
+    /// factor and whether it is free.
     edges: Vec<EdgeLane<T>>,
-    vertices: Vec<[T; 2]>,
+    vertices: Vec<[T; 3]>,
 }
 
 impl<T: Real> Direct<T> {
@@ -296,6 +298,7 @@ impl<T: Real> Direct<T> {
 
     /// Loads the predicted positions and frames and the constants of
     /// `T::WIDTH` strands of one vertex count, and resets the multipliers.
+    #[inline(always)]
     pub fn begin(&mut self, strands: &[DirectInput<'_>]) {
         debug_assert_eq!(strands.len(), T::WIDTH);
         let n = strands[0].p.len();
@@ -306,26 +309,27 @@ impl<T: Real> Direct<T> {
             self.factors.clear();
             self.factors.resize(m, Factor::default());
         }
+        // Strand by strand into the lanes (a store per number), not lane
+        // by lane: eight scalar stores read back at once as one vector
+        // stall the load, and `begin` was a sixth of a step.
+        let zero = T::splat(0.0);
         self.contact.clear();
-        if strands.iter().all(|s| s.contact_normals.is_empty()) {
-            self.contact.resize(n, [T::splat(0.0); 3]);
-        } else {
-            self.contact.extend((0..n).map(|i| {
-                build::<T, 3>(|c| {
-                    gather(strands, |s| {
-                        s.contact_normals.get(i).map_or(0.0, |v| v[c] as f64)
-                    })
-                })
-            }));
+        self.contact.resize(n, [zero; 3]);
+        self.p.clear();
+        self.p.resize(n, [zero; 3]);
+        self.q.clear();
+        self.q.resize(m, [zero; 4]);
+        for (lane, s) in strands.iter().enumerate() {
+            set_lane(&mut self.contact, lane, s.contact_normals);
+            set_lane(&mut self.p, lane, s.p);
+            for (o, v) in self.q.iter_mut().zip(s.q) {
+                for c in 0..4 {
+                    o[c].set_lane(lane, v[c] as f64);
+                }
+            }
         }
         self.touching = touches(&self.contact);
         self.active = T::splat(1.0);
-        self.p.clear();
-        self.p
-            .extend((0..n).map(|i| build::<T, 3>(|c| gather(strands, |s| s.p[i][c] as f64))));
-        self.q.clear();
-        self.q
-            .extend((0..m).map(|k| build::<T, 4>(|c| gather(strands, |s| s.q[k][c] as f64))));
         self.root = build(|c| gather(strands, |s| s.root_frame[c] as f64));
         self.lambda.clear();
         self.lambda.resize(m, [T::splat(0.0); 6]);
@@ -342,6 +346,7 @@ impl<T: Real> Direct<T> {
     /// cuticle from root to tip (13)-(14): an edge takes the factor of its
     /// first joint. The inverse masses and inertias are rounded to `f32`,
     /// the precision the strand state keeps.
+    #[inline(always)]
     fn physical_constants(&mut self, strands: &[DirectInput<'_>]) {
         let n = strands[0].p.len();
         let m = n - 1;
@@ -351,15 +356,24 @@ impl<T: Real> Direct<T> {
         let shear: T = gather(strands, |s| s.material.shear_modulus);
         let density: T = gather(strands, |s| s.material.density);
         let arm_floor: T = gather(strands, |s| FRAME_INERTIA_SPEED * s.dt as f64);
-        // Per vertex, its radius and its joint's cuticle factor (each read
-        // once).
+        // Per vertex, its radius, its joint's cuticle factor and whether
+        // it is free, and per edge its length, each read once, strand by
+        // strand (as `begin`).
         self.vertices.clear();
-        self.vertices.extend((0..n).map(|i| {
-            [
-                gather::<T>(strands, |s| s.radii[i] as f64),
-                gather::<T>(strands, |s| s.joints[i].cuticle as f64),
-            ]
-        }));
+        self.vertices.resize(n, [zero; 3]);
+        self.edges.clear();
+        self.edges.resize(m, EdgeLane::default());
+        for (lane, s) in strands.iter().enumerate() {
+            let per_vertex = s.radii.iter().zip(s.joints).zip(s.free);
+            for (o, ((&radius, joint), &free)) in self.vertices.iter_mut().zip(per_vertex) {
+                o[0].set_lane(lane, radius as f64);
+                o[1].set_lane(lane, joint.cuticle as f64);
+                o[2].set_lane(lane, free as f64);
+            }
+            for (o, &l) in self.edges.iter_mut().zip(s.l) {
+                o.l.set_lane(lane, l as f64);
+            }
+        }
         let vertices = &self.vertices;
         // The cuticle factor of joint slot `i` for an edge (the root edge
         // takes joint 1's) and for the flexibility (the root is healthy;
@@ -378,9 +392,8 @@ impl<T: Real> Direct<T> {
                 vertices[i.min(m - 1)][1]
             }
         };
-        self.edges.clear();
-        self.edges.extend((0..m).map(|k| {
-            let l: T = gather(strands, |s| s.l[k] as f64);
+        for k in 0..m {
+            let l = self.edges[k].l;
             let (r0, r1) = (vertices[k][0], vertices[k + 1][0]);
             let r = half * (r0 + r1);
             let area = pi * r * r;
@@ -390,35 +403,41 @@ impl<T: Real> Direct<T> {
             let factor = half * (cuticle_at(k) + cuticle_at(k + 1));
             let (bend, twist) = edge_flexibility((youngs, shear), l, r0, r1, factor);
             let third = T::splat(3.0);
-            EdgeLane {
+            self.edges[k] = EdgeLane {
                 l,
                 half_mass: half * segment,
-                wq: (one / (segment * (arm * arm / T::splat(12.0) + r * r / T::splat(4.0))))
+                // (`* 0.25`, `* 0.5`: the bits of `/ 4`, `/ 2`.)
+                wq: (one / (segment * (arm * arm / T::splat(12.0) + r * r * T::splat(0.25))))
                     .to_f32_precision(),
-                w_twist: (one / (segment * r * r / T::splat(2.0))).to_f32_precision(),
+                w_twist: (one / (segment * r * r * half)).to_f32_precision(),
                 shear: l / (shear * cuticle * area),
                 stretch: l / (youngs * cuticle * area),
                 bend_third: bend / third,
                 twist_third: twist / third,
-            }
-        }));
+            };
+        }
         // A free vertex's inverse mass: half of each adjacent edge's mass.
         self.w.clear();
         let edges = &self.edges;
-        self.w.extend((0..n).map(|i| {
-            let free: T = gather(strands, |s| s.free[i] as f64);
+        for i in 0..n {
+            let free = vertices[i][2];
             let mass = match (i.checked_sub(1), edges.get(i)) {
                 (Some(before), Some(after)) => edges[before].half_mass + after.half_mass,
                 (None, Some(after)) => zero + after.half_mass,
                 (Some(before), None) => edges[before].half_mass,
                 (None, None) => one,
             };
-            T::gt_select(free, zero, (one / mass).to_f32_precision(), free)
-        }));
+            self.w.push(T::gt_select(
+                free,
+                zero,
+                (one / mass).to_f32_precision(),
+                free,
+            ));
+        }
         let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
         let w = &self.w;
         self.constants.clear();
-        self.constants.extend((0..m).map(|k| {
+        for k in 0..m {
             let e = &edges[k];
             // The consistent flexibility: edge k - 1 and edge k each add a
             // third of theirs to joint k, a sixth between k and k + 1.
@@ -447,7 +466,7 @@ impl<T: Real> Direct<T> {
                 }
                 None => (zero, zero),
             };
-            Constants {
+            self.constants.push(Constants {
                 l: e.l,
                 w_pair: w[k] + w[k + 1],
                 w_next: w[k + 1],
@@ -461,10 +480,17 @@ impl<T: Real> Direct<T> {
                 a_t: (twist_before + e.twist_third) * inv_dt2,
                 a_b_next: bend_next * inv_dt2,
                 a_t_next: twist_next * inv_dt2,
-                rest: build(|c| gather(strands, |s| s.rest[k][c] as f64)),
+                rest: [zero; 3],
                 rest_w: zero,
+            });
+        }
+        for (lane, s) in strands.iter().enumerate() {
+            for (c, r) in self.constants.iter_mut().zip(s.rest) {
+                for i in 0..3 {
+                    c.rest[i].set_lane(lane, r[i] as f64);
+                }
             }
-        }));
+        }
         // The rest's real part `sqrt(max(1 - |rest|^2, 0))`, in the lanes.
         for c in &mut self.constants {
             let r = c.rest;
@@ -522,6 +548,7 @@ impl<T: Real> Direct<T> {
     /// residual the user sees as stretched edges and kinks, and what the
     /// first iteration leaves after an impact; the bend/twist residual of
     /// free hair is settled by the first iteration (the cantilever tests).
+    #[inline(always)]
     pub fn unconverged(&self, tolerance: f64) -> T {
         let one = T::splat(1.0);
         let tolerance2 = T::splat(tolerance * tolerance);
