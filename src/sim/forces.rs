@@ -678,20 +678,25 @@ impl EdgeGrid {
         let lookup = self.lookup(positions, reach);
         self.entries
             .par_chunks(CHUNK_ENTRIES)
+            .zip(self.probes.par_chunks(CHUNK_ENTRIES))
             .zip(pairs[..chunk_count].par_iter_mut())
             .zip(overflow.par_iter_mut())
             .zip(scanned.par_iter_mut())
-            .for_each(|(((entries, pairs), overflow), scanned)| {
+            .for_each(|((((entries, probes), pairs), overflow), scanned)| {
                 pairs.clear();
-                for e in entries
+                // The strand from the entry's probe, read in order (the
+                // owner table, indexed by vertex, is read at random).
+                for (e, probe) in entries
                     .iter()
-                    .filter(|e| e.key & (HOME | EDGE) == HOME | EDGE)
+                    .zip(probes)
+                    .filter(|(e, _)| e.key & (HOME | EDGE) == HOME | EDGE)
                 {
                     if pairs.len() >= max_pairs {
                         *overflow = true;
                         break;
                     }
-                    lookup.pushes_of(e.vertex as usize, e.position, e.next, pairs, scanned);
+                    let edge = e.vertex as usize;
+                    lookup.pushes_of(edge, probe.strand, e.position, e.next, pairs, scanned);
                 }
             });
         let total = scanned.iter().sum();
@@ -826,14 +831,21 @@ impl Lookup<'_> {
         }
         let (a, b) = (self.positions[edge], self.positions[edge + 1]);
         if is_finite3(a) && is_finite3(b) {
-            self.pushes_of(edge, a, b, out, scanned);
+            self.pushes_of(edge, self.owner[edge], a, b, out, scanned);
         }
     }
 
-    /// [`Self::edge_pushes`] of a finite edge of an active strand, from
-    /// `a` to `b`.
-    fn pushes_of(&self, edge: usize, a: V3, b: V3, out: &mut Vec<Pair>, scanned: &mut u64) {
-        let strand = self.owner[edge];
+    /// [`Self::edge_pushes`] of a finite edge of active strand `strand`,
+    /// from `a` to `b`.
+    fn pushes_of(
+        &self,
+        edge: usize,
+        strand: u32,
+        a: V3,
+        b: V3,
+        out: &mut Vec<Pair>,
+        scanned: &mut u64,
+    ) {
         let reach = self.reach;
         let first = out.len();
         let near = NearLine::new(a, b, reach);
