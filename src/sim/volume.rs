@@ -80,6 +80,10 @@ const MAX_NODES: usize = 1 << 20;
 const ROWS_PER_TASK: usize = 64;
 /// Vertices per task of the gather.
 const GATHER_CHUNK: usize = 4096;
+/// How many vertices ahead the gather asks for its nodes (4 was slower,
+/// 8 and 16 about 15 % faster at 10,000 strands; the spreading gained
+/// nothing from it: its time goes to adding into the nodes).
+const PREFETCH_AHEAD: usize = 16;
 
 /// Per node: hair volume (m^3) and its momentum-like sum (volume x
 /// velocity).
@@ -208,6 +212,30 @@ impl Placement {
     #[inline]
     fn index(&self, base: [usize; 3]) -> usize {
         self.row(base) * self.dims[2] + base[2]
+    }
+
+    /// Asks the cache for the eight nodes of base node `first` (four rows
+    /// of two along z). Where the hair goes next is known here, not to
+    /// the hardware, and the grid is megabytes. Only a hint: no value
+    /// read or computed changes.
+    #[inline(always)]
+    fn prefetch(&self, nodes: &[Node], first: usize) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (rows, row) = (self.dims[1], self.dims[2]);
+            for k in [0, row, rows * row, (rows + 1) * row] {
+                if let Some(node) = nodes.get(first + k) {
+                    // SAFETY: a prefetch of a valid reference's address
+                    // (SSE, part of x86-64) reads nothing the program sees.
+                    unsafe {
+                        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                        _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(node).cast());
+                    }
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (nodes, first);
     }
 
     /// The nodes (x, y) steps from base node `first` (its index): the
@@ -443,7 +471,18 @@ impl Gather<'_> {
                 at += 1;
             }
             let i = offsets[order[at] as usize] + (slot - starts[at]);
+            self.prefetch(slot + PREFETCH_AHEAD);
             *dv = self.change_at(slot, i).unwrap_or([0.0; 3]);
+        }
+    }
+
+    /// Asks the cache for the nodes the gather at `slot` will read.
+    #[inline(always)]
+    fn prefetch(&self, slot: usize) {
+        if let Some(place) = self.places.get(slot) {
+            if place.first != Place::OFF {
+                self.grid.prefetch(self.nodes, place.first as usize);
+            }
         }
     }
 
