@@ -127,6 +127,9 @@ struct Context<'a> {
     angular_keep: f32,
     quaternion_mass_scale: f32,
     radius: f32,
+    /// Follow-The-Leader's velocity correction, when its pass runs: the
+    /// paper model only (the physical model's solve keeps the edges'
+    /// length), so `None` for the physical model whatever the parameters.
     ftl: Option<f32>,
     influences: [f32; 4],
     drive: [f32; 4],
@@ -412,11 +415,14 @@ impl Solver {
             angular_keep: (-parameters.angular_damping * dt).exp(),
             quaternion_mass_scale: parameters.quaternion_mass_scale,
             radius: parameters.hair_radius,
-            ftl: match parameters.inextensibility {
-                Inextensibility::Off => None,
-                Inextensibility::FollowTheLeader {
-                    velocity_correction,
-                } => Some(velocity_correction),
+            ftl: match (parameters.inextensibility, strands.material.model) {
+                (Inextensibility::Off, _) | (_, Model::Physical) => None,
+                (
+                    Inextensibility::FollowTheLeader {
+                        velocity_correction,
+                    },
+                    Model::Paper,
+                ) => Some(velocity_correction),
             },
             influences: strands.influences,
             drive: environment.bond_rate_drive.map(|r| r * dt),
@@ -1398,7 +1404,7 @@ fn lane_inputs(works: &[Work], n: usize) -> [LaneInput<'_>; LANES] {
 /// collision pass, so no vertex ends inside a collider.
 fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool) {
     let m = n - 1;
-    if ctx.ftl.is_some() && ctx.physical.is_none() && !ftl_done {
+    if ctx.ftl.is_some() && !ftl_done {
         follow_the_leader(
             &mut work.p[..n],
             &work.w[..n],
@@ -1436,13 +1442,12 @@ fn velocities_avx512(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
 #[inline(always)]
 fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
     let m = n - 1;
-    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
     // Follow-The-Leader's correction of the velocities (DFTL) is kept
     // apart: the real velocity is what the state reports.
     for i in 0..n {
         work.v[i] = math::scale(math::sub(work.p[i], work.x[i]), ctx.inv_dt);
         work.dv[i] = [0.0; 3];
-        if let Some(correction) = ftl {
+        if let Some(correction) = ctx.ftl {
             if i + 1 < n && work.w[i] > 0.0 {
                 work.dv[i] = math::scale(work.corrections[i + 1], correction * ctx.inv_dt);
             }
@@ -1525,8 +1530,7 @@ fn commit(ctx: &Context<'_>, s: StrandMut<'_>, work: &Work) {
     s.velocities.copy_from_slice(&work.v[..n]);
     // The physical model has none: they stay zero, so they are written only
     // when not already all +0 (a write would dirty memory for nothing).
-    let ftl = ctx.ftl.filter(|_| ctx.physical.is_none());
-    let unchanged = ftl.is_none()
+    let unchanged = ctx.ftl.is_none()
         && s.velocity_corrections
             .iter()
             .all(|c| c.iter().all(|v| v.to_bits() == 0));
