@@ -542,14 +542,21 @@ pub struct PhaseTimes {
     pub bonds: u64,
 }
 
+impl PhaseTimes {
+    /// `f` of each phase's two times.
+    fn each(self, o: PhaseTimes, f: impl Fn(u64, u64) -> u64) -> PhaseTimes {
+        PhaseTimes {
+            forces: f(self.forces, o.forces),
+            constraints: f(self.constraints, o.constraints),
+            bonds: f(self.bonds, o.bonds),
+        }
+    }
+}
+
 impl std::ops::Add for PhaseTimes {
     type Output = PhaseTimes;
     fn add(self, o: PhaseTimes) -> PhaseTimes {
-        PhaseTimes {
-            forces: self.forces.saturating_add(o.forces),
-            constraints: self.constraints.saturating_add(o.constraints),
-            bonds: self.bonds.saturating_add(o.bonds),
-        }
+        self.each(o, u64::saturating_add)
     }
 }
 
@@ -558,11 +565,7 @@ impl std::ops::Sub for PhaseTimes {
     /// The time between two readings of the totals (`saturating`, as the
     /// sums are).
     fn sub(self, o: PhaseTimes) -> PhaseTimes {
-        PhaseTimes {
-            forces: self.forces.saturating_sub(o.forces),
-            constraints: self.constraints.saturating_sub(o.constraints),
-            bonds: self.bonds.saturating_sub(o.bonds),
-        }
+        self.each(o, u64::saturating_sub)
     }
 }
 
