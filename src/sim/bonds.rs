@@ -142,6 +142,88 @@ fn rest_darboux_scalar(
     out
 }
 
+/// A joint's bond rates in a step with no drive and no drying: each rate
+/// held to 0..1, what that changes and the rates in effect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StillRates {
+    /// The change of each rate, `clamp(b, 0, 1) - b`.
+    pub db: [f32; 4],
+    /// The rates the rest shape uses, `min(b, clamp(b, 0, 1))`.
+    pub effective: [f32; 4],
+    /// Every change is +0 and no rate is -0 or NaN: the bond update (17)
+    /// has nothing to do (`b + 0` is `b` except for -0 and NaN).
+    pub unchanged: bool,
+}
+
+/// [`StillRates`] of `rates`.
+#[inline(always)]
+pub fn still_rates(rates: &[f32; 4]) -> StillRates {
+    #[cfg(target_arch = "x86_64")]
+    {
+        still_rates_x86(rates)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        still_rates_scalar(rates)
+    }
+}
+
+/// [`still_rates`] with the four kinds in the lanes of one SSE register,
+/// the same IEEE operations as the scalar form. Hand-written: the
+/// compiler kept the kinds apart, with `f32::min`'s NaN handling and the
+/// bit tests one kind at a time, about half of the rest shape's
+/// instructions.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn still_rates_x86(rates: &[f32; 4]) -> StillRates {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of x86-64; the load reads the 4 floats of
+    // `rates` and the stores write the 4 of `db` and of `effective`.
+    unsafe {
+        let b = _mm_loadu_ps(rates.as_ptr());
+        let (zero, one) = (_mm_setzero_ps(), _mm_set1_ps(1.0));
+        // `clamp(b, 0, 1)`: `max` keeps `b` when it is NaN or a zero
+        // (`0 > b` false), `min` likewise, as the clamp's comparisons do.
+        let target = _mm_min_ps(one, _mm_max_ps(zero, b));
+        let db = _mm_sub_ps(target, b);
+        // `b.min(target)`: `target` where `b` is NaN (then so is
+        // `target`), else the smaller; they differ only outside 0..1.
+        let effective = _mm_min_ps(b, target);
+        let still = _mm_cmpeq_epi32(_mm_castps_si128(db), _mm_setzero_si128());
+        let negative_zero = _mm_cmpeq_epi32(_mm_castps_si128(b), _mm_set1_epi32(i32::MIN));
+        let number = _mm_castps_si128(_mm_cmpord_ps(b, b));
+        let unchanged = _mm_andnot_si128(negative_zero, _mm_and_si128(still, number));
+        let mut out = StillRates {
+            db: [0.0; 4],
+            effective: [0.0; 4],
+            unchanged: _mm_movemask_epi8(unchanged) == 0xffff,
+        };
+        _mm_storeu_ps(out.db.as_mut_ptr(), db);
+        _mm_storeu_ps(out.effective.as_mut_ptr(), effective);
+        out
+    }
+}
+
+/// [`still_rates`] one kind after the other (other CPUs; and the
+/// reference its four-wide form is tested against).
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline(always)]
+fn still_rates_scalar(rates: &[f32; 4]) -> StillRates {
+    const NEGATIVE_ZERO: u32 = 0x8000_0000;
+    let mut out = StillRates {
+        db: [0.0; 4],
+        effective: *rates,
+        unchanged: true,
+    };
+    for ((&b, db), effective) in rates.iter().zip(&mut out.db).zip(&mut out.effective) {
+        let target = b.clamp(0.0, 1.0);
+        *db = target - b;
+        *effective = b.min(target);
+        out.unchanged &= db.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan();
+    }
+    out
+}
+
 /// (17): a bond kind whose rate grows by `db > 0` from `rate` remembers
 /// the current shape `omega` (real part `w`) in proportion to the growth.
 #[inline(always)]
@@ -219,6 +301,41 @@ mod tests {
                 "case {case}: {omega:?} {w} {rates:?} {memories:?}"
             );
         }
+    }
+
+    /// The four-wide still rates are the scalar ones bit for bit, for
+    /// rates in and out of 0..1 and zeros, ones, infinities and NaNs.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_four_wide_still_rates_are_the_scalar_ones_bit_for_bit() {
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            0.5,
+            0.999_999_9,
+            1.000_000_1,
+            -1e-30,
+            1e-30,
+            -0.25,
+            2.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let bits = |v: [f32; 4]| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });
+        for (i, a) in values.iter().enumerate() {
+            for (j, b) in values.iter().enumerate() {
+                let rates = [*a, *b, values[(i + j) % values.len()], 1.0];
+                let wide = still_rates_x86(&rates);
+                let scalar = still_rates_scalar(&rates);
+                assert_eq!(bits(wide.db), bits(scalar.db), "{rates:?}");
+                assert_eq!(bits(wide.effective), bits(scalar.effective), "{rates:?}");
+                assert_eq!(wide.unchanged, scalar.unchanged, "{rates:?}");
+            }
+        }
+        let intact = still_rates_x86(&[1.0; 4]);
+        assert!(intact.unchanged && intact.db == [0.0; 4]);
     }
 
     #[test]

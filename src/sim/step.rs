@@ -14,7 +14,7 @@
 //! (`Solver::set_phase_clock`) each phase's time is added up for the
 //! step's report.
 
-use super::bonds::{reform, rest_darboux};
+use super::bonds::{reform, rest_darboux, still_rates};
 use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
@@ -756,24 +756,22 @@ fn rest_shape_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
 fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     const NEGATIVE_ZERO: u32 = 0x8000_0000;
     let m = s.positions.len() - 1;
-    work.bonds_unchanged = true;
+    let mut unchanged = true;
     for j in 1..m {
         let joint = &s.joints[j];
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
         let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
-        let mut effective = joint.rates;
-        let mut db = [0.0f32; 4];
-        if ctx.bonds_still {
+        let effective = if ctx.bonds_still {
             // The general case below with zero drive and extra: the same
             // values (`b + 0` differs from `b` only for -0, which the
             // clamp and `1 - b` of the rest shape treat as 0).
-            for k in 0..4 {
-                let b = joint.rates[k];
-                let target = b.clamp(0.0, 1.0);
-                db[k] = target - b;
-                effective[k] = b.min(target);
-            }
+            let still = still_rates(&joint.rates);
+            unchanged &= still.unchanged;
+            work.db[j] = still.db;
+            still.effective
         } else {
+            let mut effective = joint.rates;
+            let mut db = [0.0f32; 4];
             for k in 0..4 {
                 let extra = if k == 0 { work.db[j][0] } else { 0.0 };
                 let b = joint.rates[k];
@@ -787,16 +785,19 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                 // Breaking acts at once; re-forming takes effect at (v).
                 effective[k] = b.min(target);
             }
-        }
-        // The bond update (17) changes nothing when every rate change is
-        // +0 (no re-forming, and `b + 0` is `b` except for -0 and NaN).
-        work.bonds_unchanged &= db
-            .iter()
-            .zip(&joint.rates)
-            .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan());
-        work.db[j] = db;
+            // The bond update (17) changes nothing when every rate change
+            // is +0 (no re-forming, and `b + 0` is `b` except for -0 and
+            // NaN).
+            unchanged &= db
+                .iter()
+                .zip(&joint.rates)
+                .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan());
+            work.db[j] = db;
+            effective
+        };
         work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
     }
+    work.bonds_unchanged = unchanged;
 }
 
 /// The bend/twist compliances of the joints: the consistent flexibility of
