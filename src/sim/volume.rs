@@ -86,8 +86,10 @@ const GATHER_CHUNK: usize = 4096;
 const PREFETCH_AHEAD: usize = 16;
 
 /// Per node: hair volume (m^3) and its momentum-like sum (volume x
-/// velocity).
+/// velocity). In this order (`repr(C)`): the gather loads a node as one
+/// four-float register.
 #[derive(Debug, Clone, Copy, Default)]
+#[repr(C)]
 struct Node {
     volume: f32,
     flow: V3,
@@ -148,8 +150,10 @@ impl Span {
 
 /// Where a vertex sits on the grid: its base node's index and its
 /// fractions along x, y, z (found once by the spreading, read by the
-/// gather).
+/// gather). In this order (`repr(C)`): the gather loads a place as one
+/// four-float register.
 #[derive(Debug, Clone, Copy, Default)]
+#[repr(C)]
 struct Place {
     /// `OFF` when the vertex is off the grid.
     first: u32,
@@ -449,31 +453,182 @@ impl Gather<'_> {
             // SAFETY: the CPU has AVX-512F.
             return unsafe { self.chunk_avx512(first, out) };
         }
-        self.chunk_slots(first, out)
+        self.chunk_slots::<false>(first, out)
     }
 
     /// `chunk` in the CPU's widest instructions (the same operations, no
-    /// FMA: the same bits).
+    /// FMA: the same bits), eight slots at a time in the lanes.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     fn chunk_avx512(&self, first: usize, out: &mut [V3]) {
-        self.chunk_slots(first, out)
+        self.chunk_slots::<true>(first, out)
     }
 
+    /// `LANES`: eight slots at a time through [`Gather::eight`] (only in
+    /// a function compiled for AVX2 or wider).
     #[inline(always)]
-    fn chunk_slots(&self, first: usize, out: &mut [V3]) {
+    fn chunk_slots<const LANES: bool>(&self, first: usize, out: &mut [V3]) {
         let (order, starts, offsets) = (self.order, self.starts, self.offsets);
         // The ordered strand holding slot `first`, then on.
         let mut at = starts.partition_point(|&s| s <= first) - 1;
-        for (j, dv) in out.iter_mut().enumerate() {
-            let slot = first + j;
+        let mut vertex = |slot: usize| {
             while starts[at + 1] <= slot {
                 at += 1;
             }
-            let i = offsets[order[at] as usize] + (slot - starts[at]);
+            offsets[order[at] as usize] + (slot - starts[at])
+        };
+        let mut done = 0;
+        #[cfg(target_arch = "x86_64")]
+        if LANES {
+            for block in out.chunks_exact_mut(8) {
+                let slot = first + done;
+                let vertices: [usize; 8] = std::array::from_fn(|l| vertex(slot + l));
+                for l in 0..8 {
+                    self.prefetch(slot + l + PREFETCH_AHEAD);
+                }
+                // SAFETY: `LANES` is only set in code compiled for
+                // AVX-512F, which the CPU has (and with it AVX2).
+                if !unsafe { self.eight(slot, &vertices, block) } {
+                    for (l, dv) in block.iter_mut().enumerate() {
+                        *dv = self.change_at(slot + l, vertices[l]).unwrap_or([0.0; 3]);
+                    }
+                }
+                done += 8;
+            }
+        }
+        for (j, dv) in out.iter_mut().enumerate().skip(done) {
+            let slot = first + j;
+            let i = vertex(slot);
             self.prefetch(slot + PREFETCH_AHEAD);
             *dv = self.change_at(slot, i).unwrap_or([0.0; 3]);
         }
+    }
+
+    /// [`Gather::change_at`] of the eight slots from `slot` (their vertices
+    /// `vertices`) into `out`, one slot per lane of AVX registers: per
+    /// lane the same operations in the same order, so the same bits. The
+    /// places and nodes are loaded as four-float registers and transposed
+    /// (a register per value, a lane per slot). One slot at a time, the
+    /// gather was a chain of dependent operations ending in a division,
+    /// with few slots in flight. Returns false, writing nothing, when a
+    /// lane's nodes or vertex would be out of bounds (the caller then
+    /// takes `change_at`'s checked reads). Hand-written: the compiler
+    /// does not turn the per-vertex layout into lanes.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn eight(&self, slot: usize, vertices: &[usize; 8], out: &mut [V3]) -> bool {
+        use std::arch::x86_64::*;
+        let (grid, nodes) = (&self.grid, self.nodes);
+        let Some(places) = self.places.get(slot..slot + 8) else {
+            return false;
+        };
+        let (rows, row) = (grid.dims[1], grid.dims[2]);
+        // The farthest node a place reads, from its base node.
+        let reach = (rows + 1) * row + 1;
+        let mut bases = [0usize; 8];
+        let mut on = [0u32; 8];
+        for l in 0..8 {
+            if places[l].first != Place::OFF {
+                bases[l] = places[l].first as usize;
+                on[l] = u32::MAX;
+            }
+            if bases[l] + reach >= nodes.len() || vertices[l] >= self.velocities.len() {
+                return false;
+            }
+        }
+        // Eight four-float values (one per lane) as four registers of eight
+        // lanes: lanes 0-3 in the low halves, 4-7 in the high, then a 4x4
+        // transpose in each half.
+        let transpose = |x: [__m128; 8]| -> [__m256; 4] {
+            let r0 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[0]), x[4]);
+            let r1 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[1]), x[5]);
+            let r2 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[2]), x[6]);
+            let r3 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[3]), x[7]);
+            let t0 = _mm256_unpacklo_ps(r0, r1);
+            let t1 = _mm256_unpackhi_ps(r0, r1);
+            let t2 = _mm256_unpacklo_ps(r2, r3);
+            let t3 = _mm256_unpackhi_ps(r2, r3);
+            [
+                _mm256_shuffle_ps::<0x44>(t0, t2),
+                _mm256_shuffle_ps::<0xee>(t0, t2),
+                _mm256_shuffle_ps::<0x44>(t1, t3),
+                _mm256_shuffle_ps::<0xee>(t1, t3),
+            ]
+        };
+        // SAFETY (the loads): a `Place` and a `Node` are four `f32`s
+        // (`repr(C)`), and every index was checked against its slice above.
+        let [_, f0, f1, f2] = transpose(std::array::from_fn(|l| unsafe {
+            _mm_loadu_ps(std::ptr::from_ref(&places[l]).cast())
+        }));
+        let corner = |dx: usize, dy: usize, dz: usize| -> [__m256; 4] {
+            let k = (dx * rows + dy) * row + dz;
+            transpose(std::array::from_fn(|l| unsafe {
+                _mm_loadu_ps(nodes.as_ptr().add(bases[l] + k).cast())
+            }))
+        };
+        let lerp = |a: __m256, b: __m256, t: __m256| {
+            _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), t))
+        };
+        let lerp4 = |a: [__m256; 4], b: [__m256; 4], t: __m256| -> [__m256; 4] {
+            std::array::from_fn(|c| lerp(a[c], b[c], t))
+        };
+        // As `change_at`: along z, y, then x, and the volume's differences.
+        let mut along_y = [[_mm256_setzero_ps(); 4]; 2];
+        let mut dy_volume = [_mm256_setzero_ps(); 2];
+        let mut dz_volume = [_mm256_setzero_ps(); 2];
+        for dx in 0..2 {
+            let low = [corner(dx, 0, 0), corner(dx, 0, 1)];
+            let high = [corner(dx, 1, 0), corner(dx, 1, 1)];
+            let (z_low, z_high) = (lerp4(low[0], low[1], f2), lerp4(high[0], high[1], f2));
+            along_y[dx] = lerp4(z_low, z_high, f1);
+            dy_volume[dx] = _mm256_sub_ps(z_high[0], z_low[0]);
+            dz_volume[dx] = lerp(
+                _mm256_sub_ps(low[1][0], low[0][0]),
+                _mm256_sub_ps(high[1][0], high[0][0]),
+                f1,
+            );
+        }
+        let [volume, fx, fy, fz] = lerp4(along_y[0], along_y[1], f0);
+        let gradient = [
+            _mm256_sub_ps(along_y[1][0], along_y[0][0]),
+            lerp(dy_volume[0], dy_volume[1], f0),
+            lerp(dz_volume[0], dz_volume[1], f0),
+        ];
+        let v: [__m256; 3] = std::array::from_fn(|c| {
+            let at = |l: usize| self.velocities[vertices[l]][c];
+            _mm256_setr_ps(at(0), at(1), at(2), at(3), at(4), at(5), at(6), at(7))
+        });
+        let (keep, push, scale) = (
+            _mm256_set1_ps(self.keep),
+            _mm256_set1_ps(self.push),
+            _mm256_set1_ps(self.scale),
+        );
+        // Where there is no hair volume the change is `0 - push`, as in
+        // `change_at` (the lanes divide anyway and drop the quotient).
+        let positive = _mm256_cmp_ps::<_CMP_GT_OQ>(volume, _mm256_setzero_ps());
+        let per_volume = _mm256_div_ps(_mm256_set1_ps(1.0), volume);
+        let mut kept = _mm256_castsi256_ps(_mm256_loadu_si256(on.as_ptr().cast()));
+        let (largest, sign) = (_mm256_set1_ps(f32::MAX), _mm256_set1_ps(-0.0));
+        let mut change = [_mm256_setzero_ps(); 3];
+        for (c, flow) in [fx, fy, fz].into_iter().enumerate() {
+            let toward = _mm256_sub_ps(_mm256_mul_ps(flow, per_volume), v[c]);
+            change[c] = _mm256_sub_ps(
+                _mm256_and_ps(positive, _mm256_mul_ps(keep, toward)),
+                _mm256_mul_ps(_mm256_mul_ps(push, gradient[c]), scale),
+            );
+            // `is_finite`: |x| <= MAX, false for infinities and NaN.
+            let magnitude = _mm256_andnot_ps(sign, change[c]);
+            kept = _mm256_and_ps(kept, _mm256_cmp_ps::<_CMP_LE_OQ>(magnitude, largest));
+        }
+        let mut lanes = [[0.0f32; 8]; 3];
+        for (lane, change) in lanes.iter_mut().zip(change) {
+            _mm256_storeu_ps(lane.as_mut_ptr(), _mm256_and_ps(kept, change));
+        }
+        for (l, dv) in out.iter_mut().enumerate() {
+            *dv = [lanes[0][l], lanes[1][l], lanes[2][l]];
+        }
+        true
     }
 
     /// Asks the cache for the nodes the gather at `slot` will read.
@@ -960,5 +1115,98 @@ mod tests {
         assert!(one.iter().any(|b| *b != 0));
         assert_eq!(one, run(2));
         assert_eq!(one, run(3));
+    }
+
+    /// The gather eight slots at a time in the lanes gives the bits of the
+    /// gather one slot at a time: random nodes (some empty, some with a
+    /// negative or non-finite volume), places on and off the grid, and
+    /// velocities with infinities and NaNs, over strands of uneven length.
+    #[test]
+    fn the_gather_in_lanes_is_the_gather_one_slot_at_a_time() {
+        if !wide_lanes_available() {
+            return;
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            // xorshift64*: a fixed sequence, no dependency.
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let grid = Placement {
+            origin: [0.0; 3],
+            inv_cell: 200.0,
+            dims: [5, 6, 7],
+        };
+        let special = [0.0, -0.0, -1e-9, f32::INFINITY, f32::NAN, 1e30];
+        let nodes: Vec<Node> = (0..grid.node_count())
+            .map(|k| Node {
+                volume: if k % 5 == 0 {
+                    special[k / 5 % special.len()]
+                } else {
+                    next() * 1e-9
+                },
+                flow: [next() - 0.5, next() - 0.5, next() * 1e-9],
+            })
+            .collect();
+        let offsets: Vec<usize> = [0, 13, 40, 41, 90, 203, 230].to_vec();
+        let vertices = *offsets.last().unwrap();
+        let mut slots = 0;
+        let starts: Vec<usize> = std::iter::once(0)
+            .chain(offsets.windows(2).map(|w| {
+                slots += w[1] - w[0];
+                slots
+            }))
+            .collect();
+        let order: Vec<u32> = (0..offsets.len() as u32 - 1).collect();
+        let places: Vec<Place> = (0..vertices)
+            .map(|i| {
+                if i % 11 == 3 {
+                    return Place {
+                        first: Place::OFF,
+                        fraction: [0.0; 3],
+                    };
+                }
+                let base = [0, 1, 2].map(|c| (next() * (grid.dims[c] - 1) as f32) as usize);
+                Place {
+                    first: grid.index(base.map(|b| b.min(3))) as u32,
+                    fraction: [next(), next(), next()],
+                }
+            })
+            .collect();
+        let velocities: Vec<V3> = (0..vertices)
+            .map(|i| match i % 17 {
+                5 => [f32::NAN, 0.0, 0.0],
+                9 => [0.0, f32::INFINITY, 0.0],
+                _ => [next() - 0.5, next() - 0.5, next() - 0.5],
+            })
+            .collect();
+        let gather = Gather {
+            grid,
+            nodes: &nodes,
+            places: &places,
+            velocities: &velocities,
+            order: &order,
+            starts: &starts,
+            offsets: &offsets,
+            keep: 0.05,
+            push: 0.03,
+            scale: 1e6,
+        };
+        let bits = |out: &[V3]| {
+            out.iter()
+                .flat_map(|v| v.map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        for first in [0, 3, 8, 100] {
+            let mut one = vec![[1.0; 3]; vertices - first];
+            gather.chunk_slots::<false>(first, &mut one);
+            let mut lanes = vec![[2.0; 3]; vertices - first];
+            // SAFETY: the CPU has AVX-512F (checked above).
+            unsafe { gather.chunk_avx512(first, &mut lanes) };
+            assert_eq!(bits(&one), bits(&lanes), "from slot {first}");
+            assert!(one.iter().any(|v| v[0] != 0.0));
+        }
     }
 }
