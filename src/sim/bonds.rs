@@ -224,6 +224,110 @@ fn still_rates_scalar(rates: &[f32; 4]) -> StillRates {
     out
 }
 
+/// One joint of eight strands in a still step, one strand per lane of AVX
+/// registers: per lane the operations of `darboux`, `darboux_real`,
+/// [`still_rates`] and [`rest_darboux`] in the same order, so the same
+/// bits as strand by strand. `frames` are the old frames of the joint's
+/// two edges, `rates` and `memories` its bonds. Returns the rest shapes,
+/// the rate changes and, per lane (bit `l`), whether the rates stay
+/// unchanged. Strand by strand the rest shape was a sixth of a step, a
+/// chain of dependent operations per joint with few joints in flight.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub fn still_rest_eight(
+    frames: [(&[f32; 4], &[f32; 4]); 8],
+    rates: [&[f32; 4]; 8],
+    memories: [&[V3; 4]; 8],
+    influences: &[f32; 4],
+) -> ([V3; 8], [[f32; 4]; 8], u32) {
+    use super::lanes::{eight_to_lanes, lanes_to_eight};
+    use std::arch::x86_64::*;
+    // SAFETY (the loads): each reads four floats of a `[f32; 4]`, or of
+    // the twelve of a `[V3; 4]` (an array of arrays: contiguous).
+    let load = |x: &[f32; 4]| unsafe { _mm_loadu_ps(x.as_ptr()) };
+    let [ax, ay, az, aw] = eight_to_lanes(std::array::from_fn(|l| load(frames[l].0)));
+    let [bx, by, bz, bw] = eight_to_lanes(std::array::from_fn(|l| load(frames[l].1)));
+    let memory = |part: usize| {
+        eight_to_lanes(std::array::from_fn(|l| unsafe {
+            _mm_loadu_ps(memories[l].as_flattened().as_ptr().add(4 * part))
+        }))
+    };
+    // Twelve floats per strand, kind after kind: x y z of kind 0, ...
+    let [m0, m1, m2] = [memory(0), memory(1), memory(2)];
+    let m: [[__m256; 3]; 4] = [
+        [m0[0], m0[1], m0[2]],
+        [m0[3], m1[0], m1[1]],
+        [m1[2], m1[3], m2[0]],
+        [m2[1], m2[2], m2[3]],
+    ];
+    let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
+    // `darboux`: Im(conj(a) b), each coordinate's terms in its order.
+    let omega = [
+        add(sub(sub(mul(aw, bx), mul(ax, bw)), mul(ay, bz)), mul(az, by)),
+        sub(sub(add(mul(aw, by), mul(ax, bz)), mul(ay, bw)), mul(az, bx)),
+        sub(add(sub(mul(aw, bz), mul(ax, by)), mul(ay, bx)), mul(az, bw)),
+    ];
+    // `darboux_real`: the 4D dot product, summed x, y, z, w.
+    let w = add(add(add(mul(ax, bx), mul(ay, by)), mul(az, bz)), mul(aw, bw));
+    // `canonical_darboux`: negated where the real part is negative.
+    let (zero, one) = (_mm256_setzero_ps(), _mm256_set1_ps(1.0));
+    let flip = _mm256_cmp_ps::<_CMP_LT_OQ>(w, zero);
+    let minus_one = _mm256_set1_ps(-1.0);
+    let omega = omega.map(|o| _mm256_blendv_ps(o, mul(o, minus_one), flip));
+    let w = _mm256_blendv_ps(w, _mm256_xor_ps(w, _mm256_set1_ps(-0.0)), flip);
+    // `still_rates`, kind by kind.
+    let b = eight_to_lanes(std::array::from_fn(|l| load(rates[l])));
+    let mut unchanged = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    let mut db = [zero; 4];
+    let mut effective = [zero; 4];
+    for k in 0..4 {
+        let target = _mm256_min_ps(one, _mm256_max_ps(zero, b[k]));
+        db[k] = sub(target, b[k]);
+        effective[k] = _mm256_min_ps(b[k], target);
+        let still = _mm256_cmpeq_epi32(_mm256_castps_si256(db[k]), _mm256_setzero_si256());
+        let negative_zero =
+            _mm256_cmpeq_epi32(_mm256_castps_si256(b[k]), _mm256_set1_epi32(i32::MIN));
+        let number = _mm256_cmp_ps::<_CMP_ORD_Q>(b[k], b[k]);
+        let kept = _mm256_andnot_si256(negative_zero, still);
+        unchanged = _mm256_and_ps(unchanged, _mm256_and_ps(_mm256_castsi256_ps(kept), number));
+    }
+    // `rest_darboux`: each kind's term, summed in kind order from 0.
+    let mut out = [zero; 3];
+    for k in 0..4 {
+        let [mx, my, mz] = m[k];
+        let along = add(add(mul(omega[0], mx), mul(omega[1], my)), mul(omega[2], mz));
+        let norm2 = add(add(mul(mx, mx), mul(my, my)), mul(mz, mz));
+        let real = _mm256_sqrt_ps(_mm256_max_ps(sub(one, norm2), zero));
+        let test = add(along, mul(w, real));
+        let sign = _mm256_blendv_ps(one, minus_one, _mm256_cmp_ps::<_CMP_LT_OQ>(test, zero));
+        let broken = sub(one, effective[k]);
+        let f = _mm256_set1_ps(influences[k]);
+        for (c, m) in [mx, my, mz].into_iter().enumerate() {
+            let remembered = mul(sign, m);
+            let term = mul(f, add(remembered, mul(broken, sub(omega[c], remembered))));
+            out[c] = add(out[c], term);
+        }
+    }
+    let mut rest = [[0.0f32; 3]; 8];
+    for (l, v) in lanes_to_eight([out[0], out[1], out[2], zero])
+        .into_iter()
+        .enumerate()
+    {
+        let mut four = [0.0f32; 4];
+        // SAFETY: stores the four floats of `four`.
+        unsafe { _mm_storeu_ps(four.as_mut_ptr(), v) };
+        rest[l] = [four[0], four[1], four[2]];
+    }
+    let mut changes = [[0.0f32; 4]; 8];
+    for (l, v) in lanes_to_eight(db).into_iter().enumerate() {
+        // SAFETY: stores the four floats of `changes[l]`.
+        unsafe { _mm_storeu_ps(changes[l].as_mut_ptr(), v) };
+    }
+    let mask = _mm256_movemask_ps(unchanged) as u32;
+    (rest, changes, mask)
+}
+
 /// (17): a bond kind whose rate grows by `db > 0` from `rate` remembers
 /// the current shape `omega` (real part `w`) in proportion to the growth.
 #[inline(always)]
@@ -336,6 +440,86 @@ mod tests {
         }
         let intact = still_rates_x86(&[1.0; 4]);
         assert!(intact.unchanged && intact.db == [0.0; 4]);
+    }
+
+    /// A joint of eight strands in the lanes gives the bits of the same
+    /// joint strand by strand, for random frames (some of them of opposite
+    /// sign, so the Darboux quaternion's real part is negative), memories
+    /// and rates, with zeros, ones, infinities and NaNs among them.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_still_rest_shape_of_eight_strands_is_theirs_one_by_one() {
+        use crate::sim::math::{darboux, darboux_real};
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            // xorshift64*: a fixed sequence, no dependency.
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            let bits = state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
+            bits as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let special = [0.0, -0.0, 1.0, -1.0, f32::NAN, f32::INFINITY, 1e-30, 2.0];
+        let influences = [0.33, 0.30, 0.20, 0.17];
+        let bits3 = |v: V3| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });
+        let bits4 = |v: [f32; 4]| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });
+        let mut unchanged_lanes = 0;
+        for case in 0..4_000 {
+            let mut frames = [([0.0f32; 4], [0.0f32; 4]); 8];
+            let mut rates = [[0.0f32; 4]; 8];
+            let mut memories = [[[0.0f32; 3]; 4]; 8];
+            for l in 0..8 {
+                let a = [next(), next(), next(), next()];
+                let mut b = a.map(|x| x + 0.2 * next());
+                if (case + l) % 3 == 0 {
+                    b = b.map(|x| -x);
+                }
+                frames[l] = (a, b);
+                rates[l] = [next().abs(), 1.0, next() * 1.5, 0.0];
+                if (case + l) % 4 == 0 {
+                    rates[l] = [1.0; 4];
+                }
+                for kind in memories[l].iter_mut() {
+                    *kind = [next() * 0.7, next() * 0.7, next() * 0.7];
+                }
+                if (case + l) % 29 == 0 {
+                    let k = (case + l) / 29 % special.len();
+                    rates[l][l % 4] = special[k];
+                    memories[l][(l + 1) % 4][l % 3] = special[(k + 1) % special.len()];
+                    frames[l].1[l % 4] = special[(k + 2) % special.len()];
+                }
+            }
+            // SAFETY: the CPU has AVX2 (checked above).
+            let (rest, db, unchanged) = unsafe {
+                still_rest_eight(
+                    std::array::from_fn(|l| (&frames[l].0, &frames[l].1)),
+                    std::array::from_fn(|l| &rates[l]),
+                    std::array::from_fn(|l| &memories[l]),
+                    &influences,
+                )
+            };
+            for l in 0..8 {
+                let (a, b) = frames[l];
+                let one = still_rates(&rates[l]);
+                let expected = rest_darboux(
+                    darboux(a, b),
+                    darboux_real(a, b),
+                    &one.effective,
+                    &memories[l],
+                    &influences,
+                );
+                let at = format!("case {case} lane {l}: {:?} {:?}", frames[l], rates[l]);
+                assert_eq!(bits3(rest[l]), bits3(expected), "{at}");
+                assert_eq!(bits4(db[l]), bits4(one.db), "{at}");
+                assert_eq!(unchanged >> l & 1 == 1, one.unchanged, "{at}");
+                unchanged_lanes += usize::from(one.unchanged);
+            }
+        }
+        // Both answers of the unchanged test were met.
+        assert!(unchanged_lanes > 1000 && unchanged_lanes < 4_000 * 8);
     }
 
     #[test]

@@ -14,6 +14,8 @@
 //! (`Solver::set_phase_clock`) each phase's time is added up for the
 //! step's report.
 
+#[cfg(target_arch = "x86_64")]
+use super::bonds::still_rest_eight;
 use super::bonds::{reform, rest_darboux, still_rates};
 use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
@@ -800,6 +802,45 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     work.bonds_unchanged = unchanged;
 }
 
+/// `rest_shape` of eight strands of one vertex count in a still step (no
+/// bond drive, no drying), joint by joint with a strand per lane
+/// (`still_rest_eight`: the same bits). Returns false, doing nothing,
+/// where it does not apply: the caller then takes `rest_shape` strand by
+/// strand.
+fn rest_shapes_in_lanes(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mut [Work]) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 && ctx.bonds_still && strands.len() == WIDE && works.len() >= WIDE {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`), and with it AVX2.
+        unsafe { rest_shapes_avx512(ctx, strands, works) };
+        return true;
+    }
+    let _ = (ctx, strands, works);
+    false
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn rest_shapes_avx512(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mut [Work]) {
+    let m = strands[0].positions.len() - 1;
+    let mut unchanged = u32::MAX;
+    for j in 1..m {
+        let (rest, db, same) = still_rest_eight(
+            std::array::from_fn(|l| (&works[l].q_old[j - 1], &works[l].q_old[j])),
+            std::array::from_fn(|l| &strands[l].joints[j].rates),
+            std::array::from_fn(|l| &strands[l].joints[j].memories),
+            &ctx.influences,
+        );
+        unchanged &= same;
+        for (l, work) in works.iter_mut().take(WIDE).enumerate() {
+            work.rest[j] = rest[l];
+            work.db[j] = db[l];
+        }
+    }
+    for (l, work) in works.iter_mut().take(WIDE).enumerate() {
+        work.bonds_unchanged = unchanged >> l & 1 == 1;
+    }
+}
+
 /// The bend/twist compliances of the joints: the consistent flexibility of
 /// a moment that varies linearly along each edge (the mixed, Hellinger-
 /// Reissner beam element; the XPBD multipliers are the joints' moments).
@@ -1191,8 +1232,10 @@ fn step_group_direct<T: Real>(
         predict(ctx, s, work);
     }
     clock.lap(&mut phases.forces);
-    for (s, work) in strands.iter().zip(works.iter_mut()) {
-        rest_shape(ctx, s, work);
+    if !rest_shapes_in_lanes(ctx, strands, works) {
+        for (s, work) in strands.iter().zip(works.iter_mut()) {
+            rest_shape(ctx, s, work);
+        }
     }
     clock.lap(&mut phases.bonds);
     for work in works.iter_mut().take(lanes) {

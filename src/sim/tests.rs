@@ -782,6 +782,14 @@ fn physical_wide_groups_match_strands_stepped_alone_bit_for_bit() {
 }
 
 #[test]
+fn physical_wide_groups_in_a_still_step_match_strands_stepped_alone_bit_for_bit() {
+    // With no drive and no blower the groups of eight find their rest
+    // shapes joint by joint in lanes (`still_rest_eight`); some bonds are
+    // broken, so the rest shapes mix memory and current shape.
+    assert_groups_match_strands_alone_in(&Material::default(), 40, 19, 1, 0.0, true);
+}
+
+#[test]
 fn strands_that_converge_first_keep_their_state_while_their_group_iterates() {
     // With a Newton tolerance strands stop after different counts: those
     // that converged keep their state bit for bit while the others of their
@@ -808,6 +816,20 @@ fn assert_groups_match_strands_alone(
     lengths: usize,
     tolerance: f32,
 ) -> u64 {
+    assert_groups_match_strands_alone_in(material, steps, count, lengths, tolerance, false)
+}
+
+/// [`assert_groups_match_strands_alone`], in a `still` step (no bond
+/// drive, no blower: the rest shape's still path) with some bonds broken,
+/// or with a drive and a blower.
+fn assert_groups_match_strands_alone_in(
+    material: &Material,
+    steps: usize,
+    count: usize,
+    lengths: usize,
+    tolerance: f32,
+    still: bool,
+) -> u64 {
     // Mixed lengths (13 strands of 25, 24 and 23 vertices: sorted into three
     // uniform groups and one single) plus every force.
     let mut strands = Vec::new();
@@ -824,6 +846,10 @@ fn assert_groups_match_strands_alone(
     }
     let groom = metres(Groom::from_strands(&strands));
     let mut grouped_set = StrandSet::from_groom(&groom, material).unwrap();
+    if still {
+        grouped_set.set_all_bond_rates(BondKind::Hydrogen, 0.4);
+        grouped_set.set_all_bond_rates(BondKind::Ionic, 0.7);
+    }
     let mut alone_set = grouped_set.clone();
     let parameters = SolverParameters {
         hair_radius: 1e-3,
@@ -836,17 +862,21 @@ fn assert_groups_match_strands_alone(
     grouped.set_phase_clock(true);
     let mut alone = Solver::new(parameters).unwrap().without_simd();
     let colliders = head_and_pillow();
-    let env = Environment {
-        blower: Some(Blower {
-            falloff_length: 1.0,
-            cone_half_angle: None,
-            from: [0.3, 0.2, 0.0],
-            to: [0.0, 0.0, 0.0],
-            strength: 6.0,
-            hydrogen_rate: 0.003,
-        }),
-        bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
-        ..Environment::default()
+    let env = if still {
+        Environment::default()
+    } else {
+        Environment {
+            blower: Some(Blower {
+                falloff_length: 1.0,
+                cone_half_angle: None,
+                from: [0.3, 0.2, 0.0],
+                to: [0.0, 0.0, 0.0],
+                strength: 6.0,
+                hydrogen_rate: 0.003,
+            }),
+            bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
+            ..Environment::default()
+        }
     };
     let mut solves = 0;
     let mut phases = PhaseTimes::default();

@@ -21,6 +21,8 @@
 //! order are fixed; the changes are only read. Buffers are kept from step
 //! to step (no allocation once warm, unless the hair's box grows).
 
+#[cfg(target_arch = "x86_64")]
+use super::lanes::eight_to_lanes;
 use super::math::{is_finite3, V3};
 use super::step::wide_lanes_available;
 use serde::{Deserialize, Serialize};
@@ -537,25 +539,7 @@ impl Gather<'_> {
                 return false;
             }
         }
-        // Eight four-float values (one per lane) as four registers of eight
-        // lanes: lanes 0-3 in the low halves, 4-7 in the high, then a 4x4
-        // transpose in each half.
-        let transpose = |x: [__m128; 8]| -> [__m256; 4] {
-            let r0 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[0]), x[4]);
-            let r1 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[1]), x[5]);
-            let r2 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[2]), x[6]);
-            let r3 = _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(x[3]), x[7]);
-            let t0 = _mm256_unpacklo_ps(r0, r1);
-            let t1 = _mm256_unpackhi_ps(r0, r1);
-            let t2 = _mm256_unpacklo_ps(r2, r3);
-            let t3 = _mm256_unpackhi_ps(r2, r3);
-            [
-                _mm256_shuffle_ps::<0x44>(t0, t2),
-                _mm256_shuffle_ps::<0xee>(t0, t2),
-                _mm256_shuffle_ps::<0x44>(t1, t3),
-                _mm256_shuffle_ps::<0xee>(t1, t3),
-            ]
-        };
+        let transpose = |x: [__m128; 8]| eight_to_lanes(x);
         // SAFETY (the loads): a `Place` and a `Node` are four `f32`s
         // (`repr(C)`), and every index was checked against its slice above.
         let [_, f0, f1, f2] = transpose(std::array::from_fn(|l| unsafe {
