@@ -367,15 +367,8 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn the_four_wide_rest_shape_is_the_scalar_one_bit_for_bit() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            // xorshift64*: a fixed sequence, no dependency.
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            let bits = state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
-            bits as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut unit = crate::sim::test_sequence(0x9e37_79b9_7f4a_7c15);
+        let mut next = move || unit() * 2.0 - 1.0;
         let special = [0.0, -0.0, 1.0, -1.0, f32::NAN, f32::INFINITY, 1e-30];
         for case in 0..20_000 {
             let mut v3 = |scale: f32| [next() * scale, next() * scale, next() * scale];
@@ -453,15 +446,8 @@ mod tests {
         if !std::arch::is_x86_feature_detected!("avx2") {
             return;
         }
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            // xorshift64*: a fixed sequence, no dependency.
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            let bits = state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
-            bits as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut unit = crate::sim::test_sequence(0x9e37_79b9_7f4a_7c15);
+        let mut next = move || unit() * 2.0 - 1.0;
         let special = [0.0, -0.0, 1.0, -1.0, f32::NAN, f32::INFINITY, 1e-30, 2.0];
         let influences = [0.33, 0.30, 0.20, 0.17];
         let bits3 = |v: V3| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });

@@ -69,6 +69,20 @@ mod step;
 mod tests;
 mod volume;
 
+/// A fixed sequence of numbers in `[0, 1)` for tests (xorshift64*: no
+/// dependency), from `seed` (not zero).
+#[cfg(test)]
+pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        let bits = state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40;
+        bits as f32 / (1u64 << 24) as f32
+    }
+}
+
 pub use colliders::{Collider, ColliderSet};
 pub use parry3d;
 pub use parry3d::math::Pose;

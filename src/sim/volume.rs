@@ -1110,14 +1110,7 @@ mod tests {
         if !wide_lanes_available() {
             return;
         }
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            // xorshift64*: a fixed sequence, no dependency.
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            (state.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::sim::test_sequence(0x2545_f491_4f6c_dd1d);
         let grid = Placement {
             origin: [0.0; 3],
             inv_cell: 200.0,
