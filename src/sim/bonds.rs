@@ -209,19 +209,29 @@ fn still_rates_x86(rates: &[f32; 4]) -> StillRates {
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
 fn still_rates_scalar(rates: &[f32; 4]) -> StillRates {
-    const NEGATIVE_ZERO: u32 = 0x8000_0000;
-    let mut out = StillRates {
-        db: [0.0; 4],
-        effective: *rates,
-        unchanged: true,
-    };
-    for ((&b, db), effective) in rates.iter().zip(&mut out.db).zip(&mut out.effective) {
+    let mut db = [0.0; 4];
+    let mut effective = *rates;
+    for ((&b, db), effective) in rates.iter().zip(&mut db).zip(&mut effective) {
         let target = b.clamp(0.0, 1.0);
         *db = target - b;
         *effective = b.min(target);
-        out.unchanged &= db.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan();
     }
-    out
+    StillRates {
+        db,
+        effective,
+        unchanged: rates_unchanged(&db, rates),
+    }
+}
+
+/// Whether the bond update (17) leaves `rates` as they are after changes
+/// `db`: every change is +0 (no re-forming) and no rate is -0 or NaN
+/// (`b + 0` is `b` except for those).
+#[inline(always)]
+pub fn rates_unchanged(db: &[f32; 4], rates: &[f32; 4]) -> bool {
+    const NEGATIVE_ZERO: u32 = 0x8000_0000;
+    db.iter()
+        .zip(rates)
+        .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan())
 }
 
 /// One joint of eight strands in a still step, one strand per lane of AVX

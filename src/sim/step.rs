@@ -16,7 +16,7 @@
 
 #[cfg(target_arch = "x86_64")]
 use super::bonds::still_rest_eight;
-use super::bonds::{reform, rest_darboux, still_rates};
+use super::bonds::{rates_unchanged, reform, rest_darboux, still_rates};
 use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
@@ -756,7 +756,6 @@ fn rest_shape_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
 
 #[inline(always)]
 fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    const NEGATIVE_ZERO: u32 = 0x8000_0000;
     let m = s.positions.len() - 1;
     let mut unchanged = true;
     for j in 1..m {
@@ -787,13 +786,7 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
                 // Breaking acts at once; re-forming takes effect at (v).
                 effective[k] = b.min(target);
             }
-            // The bond update (17) changes nothing when every rate change
-            // is +0 (no re-forming, and `b + 0` is `b` except for -0 and
-            // NaN).
-            unchanged &= db
-                .iter()
-                .zip(&joint.rates)
-                .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan());
+            unchanged &= rates_unchanged(&db, &joint.rates);
             work.db[j] = db;
             effective
         };
@@ -814,6 +807,7 @@ fn rest_shapes_in_lanes(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mu
         unsafe { rest_shapes_avx512(ctx, strands, works) };
         return true;
     }
+    #[cfg(not(target_arch = "x86_64"))]
     let _ = (ctx, strands, works);
     false
 }

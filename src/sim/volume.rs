@@ -539,15 +539,14 @@ impl Gather<'_> {
                 return false;
             }
         }
-        let transpose = |x: [__m128; 8]| eight_to_lanes(x);
         // SAFETY (the loads): a `Place` and a `Node` are four `f32`s
         // (`repr(C)`), and every index was checked against its slice above.
-        let [_, f0, f1, f2] = transpose(std::array::from_fn(|l| unsafe {
+        let [_, f0, f1, f2] = eight_to_lanes(std::array::from_fn(|l| unsafe {
             _mm_loadu_ps(std::ptr::from_ref(&places[l]).cast())
         }));
         let corner = |dx: usize, dy: usize, dz: usize| -> [__m256; 4] {
             let k = (dx * rows + dy) * row + dz;
-            transpose(std::array::from_fn(|l| unsafe {
+            eight_to_lanes(std::array::from_fn(|l| unsafe {
                 _mm_loadu_ps(nodes.as_ptr().add(bases[l] + k).cast())
             }))
         };
