@@ -11,7 +11,7 @@
 #![allow(clippy::expect_used)]
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use groombake::bench::{HeadCollider, Workload};
+use groombake::bench::{HeadCollider, Treatment, Workload};
 use groombake::sim::Model;
 
 fn step(c: &mut Criterion) {
@@ -27,6 +27,7 @@ fn step(c: &mut Criterion) {
         collider: HeadCollider::None,
         render: None,
         pillow: false,
+        treatment: Treatment::Still,
     };
     let cases = [
         ("free", plain.clone()),
@@ -80,6 +81,20 @@ fn step(c: &mut Criterion) {
             "guides_5k_render",
             Workload {
                 render: Some(5_000),
+                ..plain.clone()
+            },
+        ),
+        (
+            "wet",
+            Workload {
+                treatment: Treatment::Wet,
+                ..plain.clone()
+            },
+        ),
+        (
+            "blow_dry",
+            Workload {
+                treatment: Treatment::BlowDry,
                 ..plain.clone()
             },
         ),

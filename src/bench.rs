@@ -61,6 +61,65 @@ pub struct Workload {
     /// and presses against the left side of
     /// the head, as in `samples/full_head.toml`.
     pub pillow: bool,
+    /// The bond treatment of every step.
+    pub treatment: Treatment,
+}
+
+/// The bond treatment of every step of a workload: what a stage's bond
+/// drive costs (the rest shape and bond update of a driven step do more
+/// than those of a still one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Treatment {
+    /// No drive: a press or settle stage.
+    #[default]
+    Still,
+    /// A wet stage: hydrogen bonds driven to 0 over 0.2 s (then held there,
+    /// still driven).
+    Wet,
+    /// A blow-dry stage as in `samples/blow_dry.toml`: a blower from the
+    /// left side across the crown, whose wind re-forms hydrogen bonds (21).
+    BlowDry,
+}
+
+impl Treatment {
+    /// The name `bench --treatment` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Treatment::Still => "still",
+            Treatment::Wet => "wet",
+            Treatment::BlowDry => "blow-dry",
+        }
+    }
+
+    /// The treatment of a name of [`Treatment::name`].
+    pub fn from_name(name: &str) -> Option<Treatment> {
+        [Treatment::Still, Treatment::Wet, Treatment::BlowDry]
+            .into_iter()
+            .find(|t| t.name() == name)
+    }
+
+    /// The step's environment (gravity on, as in a stage).
+    pub fn environment(self) -> Environment<'static> {
+        match self {
+            Treatment::Still => Environment::default(),
+            Treatment::Wet => Environment {
+                bond_rate_drive: [1.0 / 0.2, 0.0, 0.0, 0.0],
+                bond_rate_targets: [Some(0.0), None, None, None],
+                ..Environment::default()
+            },
+            Treatment::BlowDry => Environment {
+                blower: Some(crate::sim::Blower {
+                    from: [-0.30, 0.10, 0.0],
+                    to: [0.0, 0.10, 0.0],
+                    strength: 40.0,
+                    hydrogen_rate: 0.003,
+                    falloff_length: 1.0,
+                    cone_half_angle: None,
+                }),
+                ..Environment::default()
+            },
+        }
+    }
 }
 
 /// The time step of every workload, seconds (the solver's default).
@@ -90,6 +149,7 @@ impl Workload {
             collider: HeadCollider::Mesh(head),
             render: Some(100_000),
             pillow: true,
+            treatment: Treatment::Still,
         }
     }
 }
@@ -114,6 +174,8 @@ pub struct Scene {
     pub strands: StrandSet,
     pub solver: Solver,
     pub colliders: ColliderSet,
+    /// Every step's environment (the workload's treatment).
+    environment: Environment<'static>,
     delivery: Option<Delivery>,
     steps: u64,
     /// Constraint solves of all strands so far (`StepReport::solves`).
@@ -222,6 +284,7 @@ impl Workload {
             strands,
             solver,
             colliders,
+            environment: self.treatment.environment(),
             delivery,
             steps: 0,
             solves: 0,
@@ -321,9 +384,9 @@ impl Scene {
         if let Some(pillow) = self.colliders.get_mut(PILLOW) {
             pillow.move_to(pillow_pose((self.steps + 1) as f32 * dt), dt);
         }
-        let report =
-            self.solver
-                .step(&mut self.strands, &self.colliders, &Environment::default())?;
+        let report = self
+            .solver
+            .step(&mut self.strands, &self.colliders, &self.environment)?;
         if !report.contained.is_empty() {
             return Err(BenchError::NonFinite(report.contained.len()));
         }
@@ -633,6 +696,7 @@ mod tests {
             ),
             render: None,
             pillow: false,
+            treatment: Treatment::Still,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -674,6 +738,7 @@ mod tests {
             collider: HeadCollider::None,
             render: Some(400),
             pillow: true,
+            treatment: Treatment::Still,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)

@@ -6,7 +6,7 @@
 // A test harness: a failure to set up is a bug to see at once.
 #![allow(clippy::unwrap_used)]
 
-use groombake::bench::{HeadCollider, Workload};
+use groombake::bench::{HeadCollider, Treatment, Workload};
 use groombake::sim::{Material, Model, StrandSet};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -82,6 +82,7 @@ fn full() -> Workload {
         ),
         render: None,
         pillow: true,
+        treatment: Treatment::Still,
     }
 }
 
@@ -112,4 +113,16 @@ fn free_hair_allocates_nothing_per_step_either() {
         ..full()
     };
     assert_eq!(allocations_per_step(&free, Model::Physical, 1), [0; 5]);
+    // Nor a driven step (bond drive, blower).
+    for treatment in [Treatment::Wet, Treatment::BlowDry] {
+        let driven = Workload {
+            treatment,
+            ..free.clone()
+        };
+        assert_eq!(
+            allocations_per_step(&driven, Model::Physical, 1),
+            [0; 5],
+            "{treatment:?}"
+        );
+    }
 }

@@ -3,7 +3,7 @@
 
 use super::BadInput;
 use clap::Args;
-use groombake::bench::{self, HeadCollider, Workload};
+use groombake::bench::{self, HeadCollider, Treatment, Workload};
 use groombake::sim::Model;
 use std::path::PathBuf;
 
@@ -63,6 +63,12 @@ pub struct BenchArgs {
     /// centred on the head, e.g. samples/head.obj).
     #[arg(long, num_args = 1..=2, value_names = ["KIND", "FILE"])]
     collider: Vec<String>,
+    /// The bond treatment of every step: `still` (no drive: a press or
+    /// settle stage), `wet` (hydrogen bonds driven to 0 over 0.2 s) or
+    /// `blow-dry` (a blower across the crown re-forms them, as in
+    /// samples/blow_dry.toml).
+    #[arg(long, default_value = "still", value_parser = ["still", "wet", "blow-dry"])]
+    treatment: String,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -140,7 +146,13 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             collider,
             render: args.render,
             pillow: args.pillow,
+            treatment: Treatment::Still,
         },
+    };
+    let workload = Workload {
+        // (clap has checked the name.)
+        treatment: Treatment::from_name(&args.treatment).unwrap_or_default(),
+        ..workload
     };
     workload.check().map_err(|e| BadInput(e.to_string()))?;
     if let HeadCollider::Mesh(path) = &workload.collider {
@@ -173,6 +185,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "hair_hair_mode": if workload.volumetric.is_some() { "volumetric" } else { "pairwise" },
             "render": workload.render,
             "pillow": workload.pillow,
+            "treatment": workload.treatment.name(),
             "dt": dt,
             "collider": match &workload.collider {
                 HeadCollider::None => None,
@@ -207,8 +220,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         println!("{json}");
     } else {
         println!(
-            "{} strands x {} vertices, {} model, {} iterations ({:.2} per strand-step), {} threads: \
-             {} steps in {:.3} s, {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per \
+            "{} strands x {} vertices, {} model, {} iterations ({:.2} per strand-step), {} threads, \
+             treatment {}: {} steps in {:.3} s, {:.2} ms per step, {:.2} ns per vertex-step, {:.2} ns per \
              vertex-iteration ({} ns of CPU time per vertex-step)",
             workload.strands,
             workload.vertices,
@@ -216,6 +229,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             workload.iterations,
             report.solves_per_strand_step(),
             threads,
+            workload.treatment.name(),
             report.timing.steps,
             report.timing.seconds,
             report.timing.seconds * 1e3 / report.timing.steps as f64,

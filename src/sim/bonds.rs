@@ -234,9 +234,74 @@ pub fn rates_unchanged(db: &[f32; 4], rates: &[f32; 4]) -> bool {
         .all(|(d, b)| d.to_bits() == 0 && b.to_bits() != NEGATIVE_ZERO && !b.is_nan())
 }
 
-/// One joint of eight strands in a still step, one strand per lane of AVX
-/// registers: per lane the operations of `darboux`, `darboux_real`,
-/// [`still_rates`] and [`rest_darboux`] in the same order, so the same
+/// A step's bond drive: per kind the rate change (the stage's rate times
+/// `dt`) and the rate it drives toward, if any (`Environment`'s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drive {
+    pub change: [f32; 4],
+    pub targets: [Option<f32>; 4],
+}
+
+/// A joint's bond rates in a step with a drive or drying: each rate moves
+/// by the drive's change toward its target (if any), plus `extra` for
+/// hydrogen (the blower's drying, (21)), held to 0..1. Breaking acts at
+/// once (`effective`); re-forming takes effect at the bond update (17).
+#[inline(always)]
+pub fn driven_rates(rates: &[f32; 4], extra: f32, drive: &Drive) -> StillRates {
+    let mut effective = *rates;
+    let mut db = [0.0f32; 4];
+    for k in 0..4 {
+        let extra = if k == 0 { extra } else { 0.0 };
+        let b = rates[k];
+        let driven = match drive.targets[k] {
+            Some(goal) if b < goal => min_of(b + drive.change[k].abs(), goal),
+            Some(goal) => max_of(b - drive.change[k].abs(), goal),
+            None => b + drive.change[k],
+        };
+        let target = (driven + extra).clamp(0.0, 1.0);
+        db[k] = target - b;
+        effective[k] = min_of(b, target);
+    }
+    StillRates {
+        db,
+        effective,
+        unchanged: rates_unchanged(&db, rates),
+    }
+}
+
+/// `x.min(y)` with the sign of an equal zero defined (`y`), so that the
+/// lanes of [`rest_eight`] give the same bits: `f32::min` leaves it open.
+/// A NaN argument gives the other, as `f32::min`.
+#[inline(always)]
+fn min_of(x: f32, y: f32) -> f32 {
+    if x < y || y.is_nan() {
+        x
+    } else {
+        y
+    }
+}
+
+/// `x.max(y)` as [`min_of`].
+#[inline(always)]
+fn max_of(x: f32, y: f32) -> f32 {
+    if x > y || y.is_nan() {
+        x
+    } else {
+        y
+    }
+}
+
+/// How [`rest_eight`] changes the bond rates: held to 0..1 ([`still_rates`])
+/// or driven ([`driven_rates`], with each lane's hydrogen `extra`).
+#[derive(Debug, Clone, Copy)]
+pub enum RatesIn<'a> {
+    Still,
+    Driven { drive: &'a Drive, extra: [f32; 8] },
+}
+
+/// One joint of eight strands, one strand per lane of AVX registers: per
+/// lane the operations of `darboux`, `darboux_real`, [`still_rates`] or
+/// [`driven_rates`] and [`rest_darboux`] in the same order, so the same
 /// bits as strand by strand. `frames` are the old frames of the joint's
 /// two edges, `rates` and `memories` its bonds. Returns the rest shapes,
 /// the rate changes and, per lane (bit `l`), whether the rates stay
@@ -245,11 +310,12 @@ pub fn rates_unchanged(db: &[f32; 4], rates: &[f32; 4]) -> bool {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-pub fn still_rest_eight(
+pub fn rest_eight(
     frames: [(&[f32; 4], &[f32; 4]); 8],
     rates: [&[f32; 4]; 8],
     memories: [&[V3; 4]; 8],
     influences: &[f32; 4],
+    rule: RatesIn<'_>,
 ) -> ([V3; 8], [[f32; 4]; 8], u32) {
     use super::lanes::{eight_to_lanes, lanes_to_eight};
     use std::arch::x86_64::*;
@@ -286,15 +352,67 @@ pub fn still_rest_eight(
     let minus_one = _mm256_set1_ps(-1.0);
     let omega = omega.map(|o| _mm256_blendv_ps(o, mul(o, minus_one), flip));
     let w = _mm256_blendv_ps(w, _mm256_xor_ps(w, _mm256_set1_ps(-0.0)), flip);
-    // `still_rates`, kind by kind.
+    // `still_rates` or `driven_rates`, kind by kind.
     let b = eight_to_lanes(std::array::from_fn(|l| load(rates[l])));
     let mut unchanged = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     let mut db = [zero; 4];
     let mut effective = [zero; 4];
+    // `min_of(x, y)` and `max_of(x, y)` for a `y` the same in every lane
+    // (a NaN `y` keeps `x`).
+    let min_of = |x: __m256, y: f32| {
+        if y.is_nan() {
+            return x;
+        }
+        let y = _mm256_set1_ps(y);
+        _mm256_blendv_ps(y, x, _mm256_cmp_ps::<_CMP_LT_OQ>(x, y))
+    };
+    let max_of = |x: __m256, y: f32| {
+        if y.is_nan() {
+            return x;
+        }
+        let y = _mm256_set1_ps(y);
+        _mm256_blendv_ps(y, x, _mm256_cmp_ps::<_CMP_GT_OQ>(x, y))
+    };
     for k in 0..4 {
-        let target = _mm256_min_ps(one, _mm256_max_ps(zero, b[k]));
+        let target = match rule {
+            // `clamp(b, 0, 1)`: `max` keeps `b` when it is NaN or a zero
+            // (`0 > b` false), `min` likewise, as the clamp's comparisons do.
+            RatesIn::Still => _mm256_min_ps(one, _mm256_max_ps(zero, b[k])),
+            RatesIn::Driven { drive, extra } => {
+                let driven = match drive.targets[k] {
+                    Some(goal) => {
+                        let d = _mm256_set1_ps(drive.change[k].abs());
+                        let up = min_of(add(b[k], d), goal);
+                        let down = max_of(sub(b[k], d), goal);
+                        let below = _mm256_cmp_ps::<_CMP_LT_OQ>(b[k], _mm256_set1_ps(goal));
+                        _mm256_blendv_ps(down, up, below)
+                    }
+                    None => add(b[k], _mm256_set1_ps(drive.change[k])),
+                };
+                let extra = if k == 0 {
+                    // SAFETY: reads the eight floats of `extra`.
+                    unsafe { _mm256_loadu_ps(extra.as_ptr()) }
+                } else {
+                    zero
+                };
+                // `clamp(x, 0, 1)`: 0 where `x < 0`, then 1 where `x > 1`.
+                let x = add(driven, extra);
+                let x = _mm256_blendv_ps(x, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero));
+                _mm256_blendv_ps(x, one, _mm256_cmp_ps::<_CMP_GT_OQ>(x, one))
+            }
+        };
         db[k] = sub(target, b[k]);
-        effective[k] = _mm256_min_ps(b[k], target);
+        effective[k] = match rule {
+            RatesIn::Still => _mm256_min_ps(b[k], target),
+            // `min_of(b, target)`: `b` where `b < target` or `target` is NaN.
+            RatesIn::Driven { .. } => {
+                let keep = _mm256_or_ps(
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(b[k], target),
+                    _mm256_cmp_ps::<_CMP_UNORD_Q>(target, target),
+                );
+                _mm256_blendv_ps(target, b[k], keep)
+            }
+        };
         let still = _mm256_cmpeq_epi32(_mm256_castps_si256(db[k]), _mm256_setzero_si256());
         let negative_zero =
             _mm256_cmpeq_epi32(_mm256_castps_si256(b[k]), _mm256_set1_epi32(i32::MIN));
@@ -448,10 +566,12 @@ mod tests {
     /// A joint of eight strands in the lanes gives the bits of the same
     /// joint strand by strand, for random frames (some of them of opposite
     /// sign, so the Darboux quaternion's real part is negative), memories
-    /// and rates, with zeros, ones, infinities and NaNs among them.
+    /// and rates, with zeros, ones, infinities and NaNs among them; in
+    /// still steps and in driven ones (rates toward targets or not, the
+    /// blower's drying, special goals, changes and drying among them).
     #[test]
     #[cfg(target_arch = "x86_64")]
-    fn the_still_rest_shape_of_eight_strands_is_theirs_one_by_one() {
+    fn the_rest_shape_of_eight_strands_is_theirs_one_by_one() {
         use crate::sim::math::{darboux, darboux_real};
         if !std::arch::is_x86_feature_detected!("avx2") {
             return;
@@ -462,11 +582,12 @@ mod tests {
         let influences = [0.33, 0.30, 0.20, 0.17];
         let bits3 = |v: V3| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });
         let bits4 = |v: [f32; 4]| v.map(|x| if x.is_nan() { u32::MAX } else { x.to_bits() });
-        let mut unchanged_lanes = 0;
-        for case in 0..4_000 {
+        let mut unchanged_lanes = [0usize; 2];
+        for case in 0..8_000 {
             let mut frames = [([0.0f32; 4], [0.0f32; 4]); 8];
             let mut rates = [[0.0f32; 4]; 8];
             let mut memories = [[[0.0f32; 3]; 4]; 8];
+            let mut extra = [0.0f32; 8];
             for l in 0..8 {
                 let a = [next(), next(), next(), next()];
                 let mut b = a.map(|x| x + 0.2 * next());
@@ -481,25 +602,60 @@ mod tests {
                 for kind in memories[l].iter_mut() {
                     *kind = [next() * 0.7, next() * 0.7, next() * 0.7];
                 }
+                if l % 2 == 0 {
+                    extra[l] = next().abs() * 0.01;
+                }
                 if (case + l) % 29 == 0 {
                     let k = (case + l) / 29 % special.len();
                     rates[l][l % 4] = special[k];
                     memories[l][(l + 1) % 4][l % 3] = special[(k + 1) % special.len()];
                     frames[l].1[l % 4] = special[(k + 2) % special.len()];
+                    extra[l] = special[(k + 3) % special.len()];
                 }
             }
+            // Every other case still; the others driven, each kind toward
+            // a goal or not, now and then a special goal or change.
+            let drive = Drive {
+                change: std::array::from_fn(|k| match (case / 2 + k) % 4 {
+                    0 => 0.0,
+                    1 => 0.03,
+                    2 => -0.03,
+                    _ => special[(case / 2 + k) % special.len()],
+                }),
+                targets: std::array::from_fn(|k| match (case / 2 + 3 * k) % 5 {
+                    0 => None,
+                    1 => Some(0.0),
+                    2 => Some(1.0),
+                    3 => Some(0.5),
+                    _ => Some(special[(case / 2 + k) % special.len()]),
+                }),
+            };
+            let still = case % 2 == 0;
+            let rule = if still {
+                RatesIn::Still
+            } else {
+                RatesIn::Driven {
+                    drive: &drive,
+                    extra,
+                }
+            };
             // SAFETY: the CPU has AVX2 (checked above).
             let (rest, db, unchanged) = unsafe {
-                still_rest_eight(
+                rest_eight(
                     std::array::from_fn(|l| (&frames[l].0, &frames[l].1)),
                     std::array::from_fn(|l| &rates[l]),
                     std::array::from_fn(|l| &memories[l]),
                     &influences,
+                    rule,
                 )
             };
             for l in 0..8 {
                 let (a, b) = frames[l];
-                let one = still_rates(&rates[l]);
+                let one = if still {
+                    still_rates(&rates[l])
+                } else {
+                    driven_rates(&rates[l], extra[l], &drive)
+                };
                 let expected = rest_darboux(
                     darboux(a, b),
                     darboux_real(a, b),
@@ -507,15 +663,20 @@ mod tests {
                     &memories[l],
                     &influences,
                 );
-                let at = format!("case {case} lane {l}: {:?} {:?}", frames[l], rates[l]);
+                let at = format!(
+                    "case {case} lane {l}: {:?} {:?} {rule:?}",
+                    frames[l], rates[l]
+                );
                 assert_eq!(bits3(rest[l]), bits3(expected), "{at}");
                 assert_eq!(bits4(db[l]), bits4(one.db), "{at}");
                 assert_eq!(unchanged >> l & 1 == 1, one.unchanged, "{at}");
-                unchanged_lanes += usize::from(one.unchanged);
+                unchanged_lanes[usize::from(still)] += usize::from(one.unchanged);
             }
         }
-        // Both answers of the unchanged test were met.
-        assert!(unchanged_lanes > 1000 && unchanged_lanes < 4_000 * 8);
+        // Both answers of the unchanged test were met, still and driven.
+        for count in unchanged_lanes {
+            assert!(count > 100 && count < 4_000 * 8, "{unchanged_lanes:?}");
+        }
     }
 
     #[test]

@@ -14,14 +14,16 @@
 //! (`Solver::set_phase_clock`) each phase's time is added up for the
 //! step's report.
 
+use super::bonds::{driven_rates, reform, rest_darboux, still_rates, Drive};
 #[cfg(target_arch = "x86_64")]
-use super::bonds::still_rest_eight;
-use super::bonds::{rates_unchanged, reform, rest_darboux, still_rates};
+use super::bonds::{rest_eight, RatesIn};
 use super::colliders::{project, project_contact, PreparedCollider};
 use super::constraints::{
     bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
 };
 use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMaterial};
+#[cfg(target_arch = "x86_64")]
+use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
@@ -134,8 +136,8 @@ struct Context<'a> {
     /// length), so `None` for the physical model whatever the parameters.
     ftl: Option<f32>,
     influences: [f32; 4],
-    drive: [f32; 4],
-    targets: [Option<f32>; 4],
+    /// The bond drive (rate changes this step and targets).
+    drive: Drive,
     /// No drive, target or blower changes a bond rate this step.
     bonds_still: bool,
     blower: Option<Blower>,
@@ -211,6 +213,8 @@ struct Work {
     /// The predicted positions before any contact (the physical model's
     /// friction measures the normal push from them).
     predicted: Vec<V3>,
+    /// The blower's velocity change at each vertex this step.
+    blower: Vec<V3>,
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -238,6 +242,7 @@ impl Work {
             &mut self.contact_normals,
             &mut self.contact_velocities,
             &mut self.predicted,
+            &mut self.blower,
         ] {
             v.resize(n, [0.0; 3]);
         }
@@ -427,8 +432,10 @@ impl Solver {
                 ) => Some(velocity_correction),
             },
             influences: strands.influences,
-            drive: environment.bond_rate_drive.map(|r| r * dt),
-            targets: environment.bond_rate_targets,
+            drive: Drive {
+                change: environment.bond_rate_drive.map(|r| r * dt),
+                targets: environment.bond_rate_targets,
+            },
             bonds_still: environment.bond_rate_drive.iter().all(|r| *r * dt == 0.0)
                 && environment.bond_rate_targets.iter().all(Option::is_none)
                 && environment.blower.is_none(),
@@ -640,21 +647,17 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let dt = ctx.dt;
 
     // (ii) External forces, then the predicted positions.
+    if let Some(blower) = &ctx.blower {
+        blow(ctx, blower, s, work);
+    }
     for i in 0..n {
         let x = s.positions[i];
         work.x[i] = x;
-        work.db[i][0] = 0.0;
         let mut blower_dv_here = [0.0f32; 3];
-        if let Some(blower) = &ctx.blower {
-            let edge = if i < m {
-                math::sub(s.positions[i + 1], x)
-            } else {
-                math::sub(x, s.positions[i - 1])
-            };
-            blower_dv_here = blower_dv(blower, x, edge, dt);
-            // (21): drying by the blower re-forms hydrogen bonds (held
-            // vertices dry too).
-            work.db[i][0] = blower.hydrogen_rate * math::length(blower_dv_here);
+        if ctx.blower.is_some() {
+            blower_dv_here = work.blower[i];
+        } else {
+            work.db[i][0] = 0.0;
         }
         let control = s.controls[i];
         if control.targeted {
@@ -734,6 +737,91 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     }
 }
 
+/// The blower's velocity change (19) at each vertex of the strand, into
+/// `work.blower`, and its drying (21), which re-forms hydrogen bonds (held
+/// vertices dry too), into `work.db`: eight vertices at a time in lanes
+/// where the CPU has AVX-512 (`blow_eights`: the same bits), the rest one
+/// by one.
+#[inline(always)]
+fn blow(ctx: &Context<'_>, blower: &Blower, s: &StrandMut<'_>, work: &mut Work) {
+    let n = s.positions.len();
+    let m = n - 1;
+    #[allow(unused_mut)]
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx512 {
+        // SAFETY: the CPU has AVX-512F (`ctx.avx512`), and with it AVX2.
+        done = unsafe { blow_eights(blower, s.positions, ctx.dt, work) };
+    }
+    for i in done..n {
+        let x = s.positions[i];
+        let edge = if i < m {
+            math::sub(s.positions[i + 1], x)
+        } else {
+            math::sub(x, s.positions[i - 1])
+        };
+        let dv = blower_dv(blower, x, edge, ctx.dt);
+        work.blower[i] = dv;
+        work.db[i][0] = blower.hydrogen_rate * math::length(dv);
+    }
+}
+
+/// `blow` of the strand's vertices in runs of eight, one per lane; returns
+/// the vertices done (the rest are fewer than eight).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn blow_eights(blower: &Blower, positions: &[V3], dt: f32, work: &mut Work) -> usize {
+    use super::lanes::{eight_to_lanes, lanes_to_eight};
+    use std::arch::x86_64::*;
+    let n = positions.len();
+    let m = n - 1;
+    // A vertex as four floats; the fourth (the next vertex's x, or 0 at
+    // the strand's end) is not used.
+    let load = |i: usize| {
+        if i + 1 < n {
+            // SAFETY: reads vertex i and the first float of vertex i + 1
+            // (`[V3]` is contiguous).
+            unsafe { _mm_loadu_ps(positions[i].as_ptr()) }
+        } else {
+            let p = positions[i];
+            _mm_setr_ps(p[0], p[1], p[2], 0.0)
+        }
+    };
+    let rate = _mm256_set1_ps(blower.hydrogen_rate);
+    let mut start = 0;
+    while start + 8 <= n {
+        let [x, y, z, _] = eight_to_lanes(std::array::from_fn(|l| load(start + l)));
+        let [nx, ny, nz, _] = eight_to_lanes(std::array::from_fn(|l| load((start + l + 1).min(m))));
+        let mut edge = [
+            _mm256_sub_ps(nx, x),
+            _mm256_sub_ps(ny, y),
+            _mm256_sub_ps(nz, z),
+        ];
+        if start + 8 == n {
+            // The tip's edge is the last one, `p[m] - p[m - 1]`: lane 6's.
+            let last = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 6);
+            edge = edge.map(|e| _mm256_permutevar8x32_ps(e, last));
+        }
+        let dv = blower_dv_eight(blower, [x, y, z], edge, dt);
+        // `hydrogen_rate * length(dv)`.
+        let [dx, dy, dz] = dv;
+        let squared = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+            _mm256_mul_ps(dz, dz),
+        );
+        let drying = _mm256_mul_ps(rate, _mm256_sqrt_ps(squared));
+        for (l, v) in lanes_to_eight([dx, dy, dz, drying]).into_iter().enumerate() {
+            let mut four = [0.0f32; 4];
+            // SAFETY: stores the four floats of `four`.
+            unsafe { _mm_storeu_ps(four.as_mut_ptr(), v) };
+            work.blower[start + l] = [four[0], four[1], four[2]];
+            work.db[start + l][0] = four[3];
+        }
+        start += 8;
+    }
+    start
+}
+
 /// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
 /// shape from the bonds (15), after `predict` (which fills the old frames
 /// and, with a blower, the drying rates).
@@ -762,47 +850,29 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         let joint = &s.joints[j];
         let omega = math::darboux(work.q_old[j - 1], work.q_old[j]);
         let omega_w = math::darboux_real(work.q_old[j - 1], work.q_old[j]);
-        let effective = if ctx.bonds_still {
-            // The general case below with zero drive and extra: the same
-            // values (`b + 0` differs from `b` only for -0, which the
-            // clamp and `1 - b` of the rest shape treat as 0).
-            let still = still_rates(&joint.rates);
-            unchanged &= still.unchanged;
-            work.db[j] = still.db;
-            still.effective
+        let rates = if ctx.bonds_still {
+            // `driven_rates` with zero drive and extra: the same values
+            // (`b + 0` differs from `b` only for -0, which the clamp and `1
+            // - b` of the rest shape treat as 0).
+            still_rates(&joint.rates)
         } else {
-            let mut effective = joint.rates;
-            let mut db = [0.0f32; 4];
-            for k in 0..4 {
-                let extra = if k == 0 { work.db[j][0] } else { 0.0 };
-                let b = joint.rates[k];
-                let driven = match ctx.targets[k] {
-                    Some(goal) if b < goal => (b + ctx.drive[k].abs()).min(goal),
-                    Some(goal) => (b - ctx.drive[k].abs()).max(goal),
-                    None => b + ctx.drive[k],
-                };
-                let target = (driven + extra).clamp(0.0, 1.0);
-                db[k] = target - b;
-                // Breaking acts at once; re-forming takes effect at (v).
-                effective[k] = b.min(target);
-            }
-            unchanged &= rates_unchanged(&db, &joint.rates);
-            work.db[j] = db;
-            effective
+            driven_rates(&joint.rates, work.db[j][0], &ctx.drive)
         };
+        unchanged &= rates.unchanged;
+        work.db[j] = rates.db;
+        let effective = rates.effective;
         work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
     }
     work.bonds_unchanged = unchanged;
 }
 
-/// `rest_shape` of eight strands of one vertex count in a still step (no
-/// bond drive, no drying), joint by joint with a strand per lane
-/// (`still_rest_eight`: the same bits). Returns false, doing nothing,
-/// where it does not apply: the caller then takes `rest_shape` strand by
-/// strand.
+/// `rest_shape` of eight strands of one vertex count, joint by joint with
+/// a strand per lane (`rest_eight`: the same bits). Returns false, doing
+/// nothing, where it does not apply: the caller then takes `rest_shape`
+/// strand by strand.
 fn rest_shapes_in_lanes(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mut [Work]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 && ctx.bonds_still && strands.len() == WIDE && works.len() >= WIDE {
+    if ctx.avx512 && strands.len() == WIDE && works.len() >= WIDE {
         // SAFETY: the CPU has AVX-512F (`ctx.avx512`), and with it AVX2.
         unsafe { rest_shapes_avx512(ctx, strands, works) };
         return true;
@@ -818,11 +888,21 @@ fn rest_shapes_avx512(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mut 
     let m = strands[0].positions.len() - 1;
     let mut unchanged = u32::MAX;
     for j in 1..m {
-        let (rest, db, same) = still_rest_eight(
+        let rule = if ctx.bonds_still {
+            RatesIn::Still
+        } else {
+            RatesIn::Driven {
+                drive: &ctx.drive,
+                // The blower's drying, from `predict`.
+                extra: std::array::from_fn(|l| works[l].db[j][0]),
+            }
+        };
+        let (rest, db, same) = rest_eight(
             std::array::from_fn(|l| (&works[l].q_old[j - 1], &works[l].q_old[j])),
             std::array::from_fn(|l| &strands[l].joints[j].rates),
             std::array::from_fn(|l| &strands[l].joints[j].memories),
             &ctx.influences,
+            rule,
         );
         unchanged &= same;
         for (l, work) in works.iter_mut().take(WIDE).enumerate() {
