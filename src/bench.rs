@@ -716,6 +716,53 @@ mod tests {
         })
     }
 
+    /// Each treatment does what its name says: a wet step breaks the
+    /// hydrogen bonds at its rate, a blow-dry step blows the hair downwind
+    /// (from the left, -x, to +x), a still step does neither.
+    #[test]
+    fn treatments_break_bonds_and_blow_the_hair_as_named() {
+        let run = |treatment| {
+            let workload = Workload {
+                strands: 64,
+                vertices: 16,
+                model: Model::Physical,
+                iterations: 2,
+                tolerance: 0.0,
+                hair_hair: None,
+                volumetric: None,
+                collider: HeadCollider::None,
+                render: None,
+                pillow: false,
+                treatment,
+            };
+            let mut scene = workload.scene().unwrap();
+            // 0.1 s: half of the wet stage's 0.2 s soak.
+            (0..36).try_for_each(|_| scene.step()).unwrap();
+            scene.strands
+        };
+        let mean_x = |s: &StrandSet| {
+            s.positions().iter().map(|p| p[0] as f64).sum::<f64>() / s.vertex_count() as f64
+        };
+        let hydrogen = |s: &StrandSet| s.bond_rates(crate::sim::BondKind::Hydrogen).to_vec();
+        let still = run(Treatment::Still);
+        let wet = run(Treatment::Wet);
+        let blown = run(Treatment::BlowDry);
+        assert!(hydrogen(&still).iter().all(|b| *b == 1.0));
+        // Intact bonds stay so under the blower (it only re-forms them).
+        assert!(hydrogen(&blown).iter().all(|b| *b == 1.0));
+        for b in hydrogen(&wet) {
+            assert!((b - 0.5).abs() < 0.02, "{b}");
+        }
+        // Wetting alone does not move the hair; the wind does, downwind.
+        let drift = mean_x(&blown) - mean_x(&still);
+        eprintln!(
+            "blow-dry drift along x: {drift} m; wet: {}",
+            mean_x(&wet) - mean_x(&still)
+        );
+        assert!(drift > 0.01, "blow-dry moved the hair {drift} m along x");
+        assert!((mean_x(&wet) - mean_x(&still)).abs() < 1e-4);
+    }
+
     #[test]
     fn hair_hair_on_a_mesh_head_is_bit_identical_for_any_thread_count() {
         let one = positions_bits(1, Some(5.0));

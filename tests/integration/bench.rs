@@ -83,4 +83,11 @@ fn bench_steps_the_physical_model_by_default_and_the_paper_model_on_request() {
     assert_eq!(paper["model"], "paper", "{paper}");
     assert_eq!(paper["iterations"], 5, "{paper}");
     dir.run_fail(&["bench", "--model", "stiff"], 2);
+    // The treatment of the steps, still by default.
+    assert_eq!(physical["treatment"], "still", "{physical}");
+    for treatment in ["wet", "blow-dry"] {
+        let driven = run(&["--treatment", treatment]);
+        assert_eq!(driven["treatment"], treatment, "{driven}");
+    }
+    dir.run_fail(&["bench", "--treatment", "soak"], 2);
 }
