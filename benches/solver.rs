@@ -16,19 +16,7 @@ use groombake::sim::Model;
 
 fn step(c: &mut Criterion) {
     let head = concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj");
-    let plain = Workload {
-        strands: 1_000,
-        vertices: 32,
-        model: Model::Physical,
-        iterations: Model::Physical.default_iterations(),
-        tolerance: Model::Physical.default_tolerance(),
-        hair_hair: None,
-        volumetric: None,
-        collider: HeadCollider::None,
-        render: None,
-        pillow: false,
-        treatment: Treatment::Still,
-    };
+    let plain = Workload::free_hair(1_000, 32);
     let cases = [
         ("free", plain.clone()),
         (

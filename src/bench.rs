@@ -133,23 +133,36 @@ pub const EXPORT_FPS: f64 = 24.0;
 pub const MAX_RENDER: usize = crate::timeline::render::MAX_RENDER_STRANDS;
 
 impl Workload {
+    /// `strands` x `vertices` of free hair (no collider, hair-hair, render
+    /// hair or pillow) in still steps: the physical model at its default
+    /// iterations and tolerance.
+    pub fn free_hair(strands: usize, vertices: usize) -> Workload {
+        Workload {
+            strands,
+            vertices,
+            model: Model::Physical,
+            iterations: Model::Physical.default_iterations(),
+            tolerance: Model::Physical.default_tolerance(),
+            hair_hair: None,
+            volumetric: None,
+            collider: HeadCollider::None,
+            render: None,
+            pillow: false,
+            treatment: Treatment::Still,
+        }
+    }
+
     /// The full-head preset of issue 16: 5,000 guides x 32 vertices driving
     /// 100,000 render hairs, the mesh head `head`, a pillow, pairwise
     /// hair-hair on (alpha 5), the physical model at its default iterations
     /// (dt 1/360 is the solver's default).
     pub fn full_head(head: PathBuf) -> Workload {
         Workload {
-            strands: 5_000,
-            vertices: 32,
-            model: Model::Physical,
-            iterations: Model::Physical.default_iterations(),
-            tolerance: Model::Physical.default_tolerance(),
             hair_hair: Some(5.0),
-            volumetric: None,
             collider: HeadCollider::Mesh(head),
             render: Some(100_000),
             pillow: true,
-            treatment: Treatment::Still,
+            ..Workload::free_hair(5_000, 32)
         }
     }
 }
@@ -684,19 +697,12 @@ mod tests {
     /// Positions after 30 steps on the mesh head on `threads` threads.
     fn positions_bits(threads: usize, hair_hair: Option<f32>) -> Vec<u32> {
         let workload = Workload {
-            strands: 300,
-            vertices: 24,
-            model: Model::Physical,
             iterations: 5,
-            tolerance: 0.0,
             hair_hair,
-            volumetric: None,
             collider: HeadCollider::Mesh(
                 concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
             ),
-            render: None,
-            pillow: false,
-            treatment: Treatment::Still,
+            ..Workload::free_hair(300, 24)
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -723,17 +729,8 @@ mod tests {
     fn treatments_break_bonds_and_blow_the_hair_as_named() {
         let run = |treatment| {
             let workload = Workload {
-                strands: 64,
-                vertices: 16,
-                model: Model::Physical,
-                iterations: 2,
-                tolerance: 0.0,
-                hair_hair: None,
-                volumetric: None,
-                collider: HeadCollider::None,
-                render: None,
-                pillow: false,
                 treatment,
+                ..Workload::free_hair(64, 16)
             };
             let mut scene = workload.scene().unwrap();
             // 0.1 s: half of the wet stage's 0.2 s soak.
@@ -775,17 +772,9 @@ mod tests {
     #[test]
     fn render_hair_is_interpolated_and_exported_every_frame_and_the_file_removed() {
         let workload = Workload {
-            strands: 40,
-            vertices: 8,
-            model: Model::Physical,
-            iterations: 2,
-            tolerance: 0.0,
-            hair_hair: None,
-            volumetric: None,
-            collider: HeadCollider::None,
             render: Some(400),
             pillow: true,
-            treatment: Treatment::Still,
+            ..Workload::free_hair(40, 8)
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)

@@ -69,20 +69,15 @@ static LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn full() -> Workload {
     Workload {
-        strands: 403,
-        vertices: 32,
-        model: groombake::sim::Model::Physical,
+        // At the default tolerance strands stop iterating at different
+        // counts: the lanes' bookkeeping allocates nothing either.
         iterations: 5,
-        // Strands stop iterating at different counts: the lanes' bookkeeping allocates nothing either.
-        tolerance: groombake::sim::Model::Physical.default_tolerance(),
         hair_hair: Some(5.0),
-        volumetric: None,
         collider: HeadCollider::Mesh(
             concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
         ),
-        render: None,
         pillow: true,
-        treatment: Treatment::Still,
+        ..Workload::free_hair(403, 32)
     }
 }
 

@@ -135,8 +135,6 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             }
         }
         None => Workload {
-            strands: args.guides.unwrap_or(args.strands),
-            vertices: args.vertices,
             model,
             iterations,
             tolerance,
@@ -146,7 +144,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             collider,
             render: args.render,
             pillow: args.pillow,
-            treatment: Treatment::Still,
+            ..Workload::free_hair(args.guides.unwrap_or(args.strands), args.vertices)
         },
     };
     let workload = Workload {
