@@ -777,14 +777,17 @@ fn physical_simd_groups_match_strands_stepped_alone_bit_for_bit() {
 #[test]
 fn physical_wide_groups_match_strands_stepped_alone_bit_for_bit() {
     // 19 strands of one length: two groups of eight (f64x8 lanes where
-    // the CPU has AVX-512, else four of four) and three alone.
+    // the CPU has AVX-512, else four of four) and three alone. The step
+    // has a bond drive and a blower: the groups of eight find their rest
+    // shapes in lanes (`rest_eight`, driven), and the blower of each
+    // strand's first 24 vertices goes eight at a time (`blow_eights`).
     assert_groups_match_strands_alone(&Material::default(), 40, 19, 1, 0.0);
 }
 
 #[test]
 fn physical_wide_groups_in_a_still_step_match_strands_stepped_alone_bit_for_bit() {
     // With no drive and no blower the groups of eight find their rest
-    // shapes joint by joint in lanes (`still_rest_eight`); some bonds are
+    // shapes joint by joint in lanes (`rest_eight`, still); some bonds are
     // broken, so the rest shapes mix memory and current shape.
     assert_groups_match_strands_alone_in(&Material::default(), 40, 19, 1, 0.0, true);
 }
