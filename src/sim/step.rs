@@ -153,6 +153,9 @@ struct Context<'a> {
     wide: bool,
     /// The CPU has AVX-512: the per-strand phases use it too.
     avx512: bool,
+    /// The CPU has AVX2: the blower runs in eight-float lanes (on an
+    /// AVX2-only farm machine too).
+    avx2: bool,
     physical: Option<RodMaterial>,
     /// Time the phases (`Solver::set_phase_clock`).
     phase_clock: bool,
@@ -448,6 +451,7 @@ impl Solver {
             simd: *simd,
             wide: *simd && strands.material.model == Model::Physical && wide_lanes_available(),
             avx512: *simd && wide_lanes_available(),
+            avx2: *simd && avx2_available(),
             physical: match strands.material.model {
                 Model::Paper => None,
                 Model::Physical => Some(RodMaterial {
@@ -740,8 +744,8 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
 /// The blower's velocity change (19) at each vertex of the strand, into
 /// `work.blower`, and its drying (21), which re-forms hydrogen bonds (held
 /// vertices dry too), into `work.db`: eight vertices at a time in lanes
-/// where the CPU has AVX-512 (`blow_eights`: the same bits), the rest one
-/// by one.
+/// where the CPU has AVX2 (`blow_eights`: the same bits), the rest one by
+/// one.
 #[inline(always)]
 fn blow(ctx: &Context<'_>, blower: &Blower, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
@@ -749,8 +753,8 @@ fn blow(ctx: &Context<'_>, blower: &Blower, s: &StrandMut<'_>, work: &mut Work) 
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`), and with it AVX2.
+    if ctx.avx2 {
+        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
         done = unsafe { blow_eights(blower, s.positions, ctx.dt, work) };
     }
     for i in done..n {
@@ -1392,14 +1396,25 @@ pub(super) fn wide_lanes_available() -> bool {
     }
 }
 
+/// Whether the CPU has AVX2 (the eight-float lanes of the blower).
+fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// The widest instructions the solver's lanes run in on this CPU: AVX-512
 /// (eight-wide), AVX2 (four-wide) or the baseline (what `bench` reports).
 pub fn solver_instructions() -> &'static str {
     if wide_lanes_available() {
         return "AVX-512";
     }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if avx2_available() {
         return "AVX2";
     }
     "baseline"
