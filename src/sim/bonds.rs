@@ -142,22 +142,24 @@ fn rest_darboux_scalar(
     out
 }
 
-/// A joint's bond rates in a step with no drive and no drying: each rate
-/// held to 0..1, what that changes and the rates in effect.
+/// A joint's bond rates this step ([`still_rates`], [`driven_rates`]):
+/// what the step changes and the rates in effect.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StillRates {
-    /// The change of each rate, `clamp(b, 0, 1) - b`.
+pub struct JointRates {
+    /// The change of each rate, `target - b` (the target held to 0..1).
     pub db: [f32; 4],
-    /// The rates the rest shape uses, `min(b, clamp(b, 0, 1))`.
+    /// The rates the rest shape uses, `min(b, target)`: breaking acts at
+    /// once, re-forming at the bond update (17).
     pub effective: [f32; 4],
     /// Every change is +0 and no rate is -0 or NaN: the bond update (17)
     /// has nothing to do (`b + 0` is `b` except for -0 and NaN).
     pub unchanged: bool,
 }
 
-/// [`StillRates`] of `rates`.
+/// The [`JointRates`] of `rates` in a step with no drive and no drying:
+/// each rate held to 0..1 (the target is `clamp(b, 0, 1)`).
 #[inline(always)]
-pub fn still_rates(rates: &[f32; 4]) -> StillRates {
+pub fn still_rates(rates: &[f32; 4]) -> JointRates {
     #[cfg(target_arch = "x86_64")]
     {
         still_rates_x86(rates)
@@ -175,7 +177,7 @@ pub fn still_rates(rates: &[f32; 4]) -> StillRates {
 /// instructions.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn still_rates_x86(rates: &[f32; 4]) -> StillRates {
+fn still_rates_x86(rates: &[f32; 4]) -> JointRates {
     use std::arch::x86_64::*;
     // SAFETY: SSE2 is part of x86-64; the load reads the 4 floats of
     // `rates` and the stores write the 4 of `db` and of `effective`.
@@ -193,7 +195,7 @@ fn still_rates_x86(rates: &[f32; 4]) -> StillRates {
         let negative_zero = _mm_cmpeq_epi32(_mm_castps_si128(b), _mm_set1_epi32(i32::MIN));
         let number = _mm_castps_si128(_mm_cmpord_ps(b, b));
         let unchanged = _mm_andnot_si128(negative_zero, _mm_and_si128(still, number));
-        let mut out = StillRates {
+        let mut out = JointRates {
             db: [0.0; 4],
             effective: [0.0; 4],
             unchanged: _mm_movemask_epi8(unchanged) == 0xffff,
@@ -208,7 +210,7 @@ fn still_rates_x86(rates: &[f32; 4]) -> StillRates {
 /// reference its four-wide form is tested against).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 #[inline(always)]
-fn still_rates_scalar(rates: &[f32; 4]) -> StillRates {
+fn still_rates_scalar(rates: &[f32; 4]) -> JointRates {
     let mut db = [0.0; 4];
     let mut effective = *rates;
     for ((&b, db), effective) in rates.iter().zip(&mut db).zip(&mut effective) {
@@ -216,7 +218,7 @@ fn still_rates_scalar(rates: &[f32; 4]) -> StillRates {
         *db = target - b;
         *effective = b.min(target);
     }
-    StillRates {
+    JointRates {
         db,
         effective,
         unchanged: rates_unchanged(&db, rates),
@@ -247,7 +249,7 @@ pub struct Drive {
 /// hydrogen (the blower's drying, (21)), held to 0..1. Breaking acts at
 /// once (`effective`); re-forming takes effect at the bond update (17).
 #[inline(always)]
-pub fn driven_rates(rates: &[f32; 4], extra: f32, drive: &Drive) -> StillRates {
+pub fn driven_rates(rates: &[f32; 4], extra: f32, drive: &Drive) -> JointRates {
     let mut effective = *rates;
     let mut db = [0.0f32; 4];
     for k in 0..4 {
@@ -262,7 +264,7 @@ pub fn driven_rates(rates: &[f32; 4], extra: f32, drive: &Drive) -> StillRates {
         db[k] = target - b;
         effective[k] = min_of(b, target);
     }
-    StillRates {
+    JointRates {
         db,
         effective,
         unchanged: rates_unchanged(&db, rates),
@@ -374,10 +376,15 @@ pub fn rest_eight(
         _mm256_blendv_ps(y, x, _mm256_cmp_ps::<_CMP_GT_OQ>(x, y))
     };
     for k in 0..4 {
-        let target = match rule {
+        // The target held to 0..1 and the rates in effect.
+        let (target, in_effect) = match rule {
             // `clamp(b, 0, 1)`: `max` keeps `b` when it is NaN or a zero
-            // (`0 > b` false), `min` likewise, as the clamp's comparisons do.
-            RatesIn::Still => _mm256_min_ps(one, _mm256_max_ps(zero, b[k])),
+            // (`0 > b` false), `min` likewise, as the clamp's comparisons do;
+            // `b.min(target)` likewise.
+            RatesIn::Still => {
+                let target = _mm256_min_ps(one, _mm256_max_ps(zero, b[k]));
+                (target, _mm256_min_ps(b[k], target))
+            }
             RatesIn::Driven { drive, extra } => {
                 let driven = match drive.targets[k] {
                     Some(goal) => {
@@ -398,21 +405,18 @@ pub fn rest_eight(
                 // `clamp(x, 0, 1)`: 0 where `x < 0`, then 1 where `x > 1`.
                 let x = add(driven, extra);
                 let x = _mm256_blendv_ps(x, zero, _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero));
-                _mm256_blendv_ps(x, one, _mm256_cmp_ps::<_CMP_GT_OQ>(x, one))
-            }
-        };
-        db[k] = sub(target, b[k]);
-        effective[k] = match rule {
-            RatesIn::Still => _mm256_min_ps(b[k], target),
-            // `min_of(b, target)`: `b` where `b < target` or `target` is NaN.
-            RatesIn::Driven { .. } => {
+                let target = _mm256_blendv_ps(x, one, _mm256_cmp_ps::<_CMP_GT_OQ>(x, one));
+                // `min_of(b, target)`: `b` where `b < target` or `target` is
+                // NaN.
                 let keep = _mm256_or_ps(
                     _mm256_cmp_ps::<_CMP_LT_OQ>(b[k], target),
                     _mm256_cmp_ps::<_CMP_UNORD_Q>(target, target),
                 );
-                _mm256_blendv_ps(target, b[k], keep)
+                (target, _mm256_blendv_ps(target, b[k], keep))
             }
         };
+        db[k] = sub(target, b[k]);
+        effective[k] = in_effect;
         let still = _mm256_cmpeq_epi32(_mm256_castps_si256(db[k]), _mm256_setzero_si256());
         let negative_zero =
             _mm256_cmpeq_epi32(_mm256_castps_si256(b[k]), _mm256_set1_epi32(i32::MIN));

@@ -41,7 +41,8 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
 /// [`blower_dv`] of eight vertices, one per lane of AVX registers
 /// (`position` and `edge_direction` by coordinate): per lane the same
 /// operations in the same order, so the same bits; the wind's direction
-/// and the cone's slope, the same for every vertex, are found once. In a
+/// and the cone's slope, the same for every vertex, are found once for the
+/// eight (not once per vertex). In a
 /// blow-dry step the blower vertex by vertex (four square roots and three
 /// divisions in a chain) cost more than the rest of the prediction.
 #[cfg(target_arch = "x86_64")]

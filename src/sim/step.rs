@@ -864,8 +864,13 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         };
         unchanged &= rates.unchanged;
         work.db[j] = rates.db;
-        let effective = rates.effective;
-        work.rest[j] = rest_darboux(omega, omega_w, &effective, &joint.memories, &ctx.influences);
+        work.rest[j] = rest_darboux(
+            omega,
+            omega_w,
+            &rates.effective,
+            &joint.memories,
+            &ctx.influences,
+        );
     }
     work.bonds_unchanged = unchanged;
 }
