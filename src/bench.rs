@@ -82,6 +82,9 @@ pub enum Treatment {
 }
 
 impl Treatment {
+    /// Every treatment, in the order `bench --help` lists them.
+    pub const ALL: [Treatment; 3] = [Treatment::Still, Treatment::Wet, Treatment::BlowDry];
+
     /// The name `bench --treatment` takes.
     pub fn name(self) -> &'static str {
         match self {
@@ -93,9 +96,7 @@ impl Treatment {
 
     /// The treatment of a name of [`Treatment::name`].
     pub fn from_name(name: &str) -> Option<Treatment> {
-        [Treatment::Still, Treatment::Wet, Treatment::BlowDry]
-            .into_iter()
-            .find(|t| t.name() == name)
+        Treatment::ALL.into_iter().find(|t| t.name() == name)
     }
 
     /// The step's environment (gravity on, as in a stage).

@@ -67,11 +67,19 @@ pub struct BenchArgs {
     /// settle stage), `wet` (hydrogen bonds driven to 0 over 0.2 s) or
     /// `blow-dry` (a blower across the crown re-forms them, as in
     /// samples/blow_dry.toml).
-    #[arg(long, default_value = "still", value_parser = ["still", "wet", "blow-dry"])]
-    treatment: String,
+    #[arg(long, default_value = "still", value_parser = treatment_parser())]
+    treatment: Treatment,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
+}
+
+/// `--treatment`: one of [`Treatment::name`] (clap lists them in `--help`
+/// and refuses any other).
+fn treatment_parser() -> impl clap::builder::TypedValueParser<Value = Treatment> {
+    use clap::builder::{PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(Treatment::ALL.map(Treatment::name))
+        .map(|name| Treatment::from_name(&name).unwrap_or_default())
 }
 
 fn collider_of(values: &[String]) -> Result<HeadCollider, BadInput> {
@@ -148,8 +156,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         },
     };
     let workload = Workload {
-        // (clap has checked the name.)
-        treatment: Treatment::from_name(&args.treatment).unwrap_or_default(),
+        treatment: args.treatment,
         ..workload
     };
     workload.check().map_err(|e| BadInput(e.to_string()))?;
