@@ -1002,8 +1002,8 @@ impl<T: Real> Direct<T> {
     pub fn iterate_lanes(&mut self) {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU has AVX-512F, checked just above.
+            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
+                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
                 unsafe { self.iterate_avx512() };
                 return;
             }
@@ -1021,8 +1021,8 @@ impl<T: Real> Direct<T> {
     pub fn begin_lanes(&mut self, strands: &[DirectInput<'_>]) {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU has AVX-512F, checked just above.
+            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
+                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
                 unsafe { self.begin_avx512(strands) };
                 return;
             }
@@ -1052,11 +1052,21 @@ impl<T: Real> Direct<T> {
     pub fn unconverged_lanes(&self, tolerance: f64) -> T {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the CPU has AVX-512F, checked just above.
+            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
+                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
                 return unsafe { self.unconverged_avx512(tolerance) };
             }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                return unsafe { self.unconverged_avx2(tolerance) };
+            }
         }
+        self.unconverged(tolerance)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn unconverged_avx2(&self, tolerance: f64) -> T {
         self.unconverged(tolerance)
     }
 

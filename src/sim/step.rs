@@ -632,6 +632,19 @@ fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         unsafe { predict_avx512(ctx, s, work) };
         return;
     }
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+        unsafe { predict_avx2(ctx, s, work) };
+        return;
+    }
+    predict_strand(ctx, s, work);
+}
+
+/// `predict` in AVX2 (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn predict_avx2(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     predict_strand(ctx, s, work);
 }
 
@@ -836,6 +849,19 @@ fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
         unsafe { rest_shape_avx512(ctx, s, work) };
         return;
     }
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+        unsafe { rest_shape_avx2(ctx, s, work) };
+        return;
+    }
+    rest_shape_strand(ctx, s, work);
+}
+
+/// `rest_shape` in AVX2 (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn rest_shape_avx2(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     rest_shape_strand(ctx, s, work);
 }
 
@@ -1388,12 +1414,13 @@ fn finish_group(
     }
 }
 
-/// Whether the CPU has the instructions of the eight-wide solve (AVX-512F;
-/// also what the volume grid is compiled for).
+/// Whether the lanes may use AVX-512F: the CPU has it (the widest path of
+/// the eight-wide solve and the per-strand phases; also what the volume
+/// grid is compiled for), and no test has turned it off.
 pub(super) fn wide_lanes_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx512f")
+        std::arch::is_x86_feature_detected!("avx512f") && !avx512_turned_off()
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -1401,7 +1428,47 @@ pub(super) fn wide_lanes_available() -> bool {
     }
 }
 
-/// Whether the CPU has AVX2 (the eight-float lanes of the blower).
+/// Tests turn AVX-512 off (`AvxTwoOnly`) to check the AVX2 path's bits on
+/// a CPU that has both; every path gives the same bits, so other tests
+/// running meanwhile only take another path to the same results.
+#[cfg(test)]
+static AVX512_OFF: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+#[inline]
+fn avx512_turned_off() -> bool {
+    #[cfg(test)]
+    {
+        AVX512_OFF.load(std::sync::atomic::Ordering::Relaxed)
+    }
+    #[cfg(not(test))]
+    {
+        false
+    }
+}
+
+/// While alive, the lanes take the AVX2 path even on a CPU with AVX-512.
+#[cfg(test)]
+pub(super) struct AvxTwoOnly;
+
+#[cfg(test)]
+impl AvxTwoOnly {
+    pub(super) fn new() -> Self {
+        AVX512_OFF.store(true, std::sync::atomic::Ordering::Relaxed);
+        AvxTwoOnly
+    }
+}
+
+#[cfg(test)]
+impl Drop for AvxTwoOnly {
+    fn drop(&mut self) {
+        AVX512_OFF.store(false, std::sync::atomic::Ordering::Relaxed);
+    }
+}
+
+/// Whether the CPU has AVX2: the groups of four's f64 lanes, the blower's
+/// lanes and the per-strand phases where there is no AVX-512. (Groups of
+/// eight as two AVX2 registers a lane took fewer instructions but four
+/// times the L2 misses on a CPU with 512 KB of L2: not faster.)
 fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
@@ -1567,6 +1634,18 @@ fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
         // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
         return unsafe { velocities_avx512(ctx, work, n) };
     }
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+        return unsafe { velocities_avx2(ctx, work, n) };
+    }
+    velocities_strand(ctx, work, n)
+}
+
+/// `velocities` in AVX2 (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn velocities_avx2(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
     velocities_strand(ctx, work, n)
 }
 
@@ -1622,6 +1701,19 @@ fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) {
         unsafe { update_bonds_avx512(s, work) };
         return;
     }
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+        unsafe { update_bonds_avx2(s, work) };
+        return;
+    }
+    update_bonds_strand(s, work);
+}
+
+/// `update_bonds` in AVX2 (as `predict_avx512`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn update_bonds_avx2(s: &mut StrandMut<'_>, work: &Work) {
     update_bonds_strand(s, work);
 }
 
