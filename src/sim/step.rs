@@ -623,37 +623,48 @@ impl StrandMut<'_> {
     }
 }
 
-/// (ii) of the step, the "forces" phase: external forces and the
-/// predicted positions and frames in the working copy.
-fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        unsafe { predict_avx512(ctx, s, work) };
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
-        unsafe { predict_avx2(ctx, s, work) };
-        return;
-    }
-    predict_strand(ctx, s, work);
+/// Defines a phase that runs its body (an `#[inline(always)]` function of
+/// the strand) compiled for the widest instructions the CPU has: AVX-512
+/// (`ctx.avx512`), else AVX2 (`ctx.avx2`), else the baseline. The same
+/// operations, no FMA: the same bits; the wider the instructions, the more
+/// of the loops the compiler vectorises.
+macro_rules! phase_in_widest_instructions {
+    (
+        $(#[$doc:meta])*
+        fn $name:ident($ctx:ident: $ctx_ty:ty $(, $arg:ident: $ty:ty)*) $(-> $ret:ty)? => $body:expr
+    ) => {
+        $(#[$doc])*
+        fn $name($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx512f")]
+                #[allow(unused_variables)]
+                fn avx512($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
+                    $body
+                }
+                #[target_feature(enable = "avx2")]
+                #[allow(unused_variables)]
+                fn avx2($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
+                    $body
+                }
+                if $ctx.avx512 {
+                    // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+                    return unsafe { avx512($ctx $(, $arg)*) };
+                }
+                if $ctx.avx2 {
+                    // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+                    return unsafe { avx2($ctx $(, $arg)*) };
+                }
+            }
+            $body
+        }
+    };
 }
 
-/// `predict` in AVX2 (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn predict_avx2(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    predict_strand(ctx, s, work);
-}
-
-/// `predict` in the CPU's widest instructions (the same operations, no
-/// FMA: the same bits; the compiler vectorises more of the loops).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn predict_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    predict_strand(ctx, s, work);
+phase_in_widest_instructions! {
+    /// (ii) of the step, the "forces" phase: external forces and the
+    /// predicted positions and frames in the working copy.
+    fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) => predict_strand(ctx, s, work)
 }
 
 #[inline(always)]
@@ -839,37 +850,11 @@ fn blow_eights(blower: &Blower, positions: &[V3], dt: f32, work: &mut Work) -> u
     start
 }
 
-/// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
-/// shape from the bonds (15), after `predict` (which fills the old frames
-/// and, with a blower, the drying rates).
-fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        unsafe { rest_shape_avx512(ctx, s, work) };
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
-        unsafe { rest_shape_avx2(ctx, s, work) };
-        return;
-    }
-    rest_shape_strand(ctx, s, work);
-}
-
-/// `rest_shape` in AVX2 (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn rest_shape_avx2(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    rest_shape_strand(ctx, s, work);
-}
-
-/// `rest_shape` in the CPU's widest instructions (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn rest_shape_avx512(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
-    rest_shape_strand(ctx, s, work);
+phase_in_widest_instructions! {
+    /// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
+    /// shape from the bonds (15), after `predict` (which fills the old frames
+    /// and, with a blower, the drying rates).
+    fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) => rest_shape_strand(ctx, s, work)
 }
 
 #[inline(always)]
@@ -1626,34 +1611,10 @@ fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool)
     }
 }
 
-/// (vi) Velocities from the position change; returns whether the new
-/// state is finite (the strand is committed only then).
-fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        return unsafe { velocities_avx512(ctx, work, n) };
-    }
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
-        return unsafe { velocities_avx2(ctx, work, n) };
-    }
-    velocities_strand(ctx, work, n)
-}
-
-/// `velocities` in AVX2 (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn velocities_avx2(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
-    velocities_strand(ctx, work, n)
-}
-
-/// `velocities` in the CPU's widest instructions (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn velocities_avx512(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
-    velocities_strand(ctx, work, n)
+phase_in_widest_instructions! {
+    /// (vi) Velocities from the position change; returns whether the new
+    /// state is finite (the strand is committed only then).
+    fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool => velocities_strand(ctx, work, n)
 }
 
 #[inline(always)]
@@ -1692,36 +1653,10 @@ fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
     all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m])
 }
 
-/// (v) of the step, the end of the "bonds" phase: the bond update (17)
-/// with the shape after the projection.
-fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
-        unsafe { update_bonds_avx512(s, work) };
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
-        unsafe { update_bonds_avx2(s, work) };
-        return;
-    }
-    update_bonds_strand(s, work);
-}
-
-/// `update_bonds` in AVX2 (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn update_bonds_avx2(s: &mut StrandMut<'_>, work: &Work) {
-    update_bonds_strand(s, work);
-}
-
-/// `update_bonds` in the CPU's widest instructions (as `predict_avx512`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn update_bonds_avx512(s: &mut StrandMut<'_>, work: &Work) {
-    update_bonds_strand(s, work);
+phase_in_widest_instructions! {
+    /// (v) of the step, the end of the "bonds" phase: the bond update (17)
+    /// with the shape after the projection.
+    fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) => update_bonds_strand(s, work)
 }
 
 #[inline(always)]
