@@ -1007,8 +1007,8 @@ impl<T: Real> Direct<T> {
                 unsafe { self.iterate_avx512() };
                 return;
             }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
+            if super::step::avx2_available() {
+                // SAFETY: the CPU has AVX2 (`avx2_available`).
                 unsafe { self.iterate_avx2() };
                 return;
             }
@@ -1026,8 +1026,8 @@ impl<T: Real> Direct<T> {
                 unsafe { self.begin_avx512(strands) };
                 return;
             }
-            if T::WIDTH >= 4 && std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
+            if T::WIDTH >= 4 && super::step::avx2_available() {
+                // SAFETY: the CPU has AVX2 (`avx2_available`).
                 unsafe { self.begin_avx2(strands) };
                 return;
             }
@@ -1056,8 +1056,8 @@ impl<T: Real> Direct<T> {
                 // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
                 return unsafe { self.unconverged_avx512(tolerance) };
             }
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
+            if super::step::avx2_available() {
+                // SAFETY: the CPU has AVX2 (`avx2_available`).
                 return unsafe { self.unconverged_avx2(tolerance) };
             }
         }

@@ -1454,7 +1454,7 @@ impl Drop for AvxTwoOnly {
 /// lanes and the per-strand phases where there is no AVX-512. (Groups of
 /// eight as two AVX2 registers a lane took fewer instructions but four
 /// times the L2 misses on a CPU with 512 KB of L2: not faster.)
-fn avx2_available() -> bool {
+pub(super) fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
