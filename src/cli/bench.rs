@@ -298,7 +298,7 @@ fn cpu_model() -> Option<String> {
         .trim();
     Some(format!(
         "{name} ({})",
-        groombake::sim::solver_instructions()
+        groombake::sim::Instructions::of_this_cpu().name()
     ))
 }
 

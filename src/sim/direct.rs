@@ -26,6 +26,7 @@
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+use super::instructions::Instructions;
 use super::lanes::Real;
 use super::math::{Quat, V3};
 use super::state::JointState;
@@ -996,42 +997,46 @@ impl<T: Real> Direct<T> {
 }
 
 impl<T: Real> Direct<T> {
-    /// `iterate` with the widest instructions the CPU has for the lanes
+    /// `iterate` in the widest of `instructions` that fits the lanes
     /// (AVX-512 for eight, AVX2 for four; the same operations in wider
     /// registers, no FMA, so the same bits).
-    pub fn iterate_lanes(&mut self) {
+    pub fn iterate_lanes(&mut self, instructions: Instructions) {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
-                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
+            if T::WIDTH >= 8 && instructions.avx512() {
+                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
                 unsafe { self.iterate_avx512() };
                 return;
             }
-            if super::step::avx2_available() {
-                // SAFETY: the CPU has AVX2 (`avx2_available`).
+            if instructions.avx2() {
+                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
                 unsafe { self.iterate_avx2() };
                 return;
             }
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = instructions;
         self.iterate();
     }
 
-    /// [`Direct::begin`] with the widest instructions the CPU has (the
+    /// [`Direct::begin`] in the widest of `instructions` (the
     /// same bits).
-    pub fn begin_lanes(&mut self, strands: &[DirectInput<'_>]) {
+    pub fn begin_lanes(&mut self, instructions: Instructions, strands: &[DirectInput<'_>]) {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
-                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
+            if T::WIDTH >= 8 && instructions.avx512() {
+                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
                 unsafe { self.begin_avx512(strands) };
                 return;
             }
-            if T::WIDTH >= 4 && super::step::avx2_available() {
-                // SAFETY: the CPU has AVX2 (`avx2_available`).
+            if T::WIDTH >= 4 && instructions.avx2() {
+                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
                 unsafe { self.begin_avx2(strands) };
                 return;
             }
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = instructions;
         self.begin(strands);
     }
 
@@ -1047,20 +1052,22 @@ impl<T: Real> Direct<T> {
         self.begin(strands);
     }
 
-    /// [`Direct::unconverged`] with the widest instructions the CPU has
+    /// [`Direct::unconverged`] in the widest of `instructions`
     /// (the same bits).
-    pub fn unconverged_lanes(&self, tolerance: f64) -> T {
+    pub fn unconverged_lanes(&self, instructions: Instructions, tolerance: f64) -> T {
         #[cfg(target_arch = "x86_64")]
         {
-            if T::WIDTH >= 8 && super::step::wide_lanes_available() {
-                // SAFETY: the CPU has AVX-512F (`wide_lanes_available`).
+            if T::WIDTH >= 8 && instructions.avx512() {
+                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
                 return unsafe { self.unconverged_avx512(tolerance) };
             }
-            if super::step::avx2_available() {
-                // SAFETY: the CPU has AVX2 (`avx2_available`).
+            if instructions.avx2() {
+                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
                 return unsafe { self.unconverged_avx2(tolerance) };
             }
         }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = instructions;
         self.unconverged(tolerance)
     }
 

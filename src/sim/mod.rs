@@ -56,6 +56,7 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
+mod instructions;
 mod lanes;
 mod math;
 #[cfg(test)]
@@ -84,12 +85,13 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
 }
 
 pub use colliders::{Collider, ColliderSet};
+pub use instructions::Instructions;
 pub use parry3d;
 pub use parry3d::math::Pose;
 pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
 pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
-pub use step::{solver_instructions, Solver};
+pub use step::Solver;
 pub use volume::Volumetric;
 
 use serde::{Deserialize, Serialize};

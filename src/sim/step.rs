@@ -25,6 +25,7 @@ use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMa
 #[cfg(target_arch = "x86_64")]
 use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
+use super::instructions::Instructions;
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
@@ -42,6 +43,8 @@ pub struct Solver {
     parameters: SolverParameters,
     /// Groups of four in SIMD lanes (off only to test the scalar path).
     simd: bool,
+    /// The widest instructions the lanes may use.
+    instructions: Instructions,
     grid: EdgeGrid,
     volume: VolumeGrid,
     dispatch: Dispatch,
@@ -148,14 +151,12 @@ struct Context<'a> {
     colliders: &'a [PreparedCollider<'a>],
     root_transform: Rigid,
     simd: bool,
-    /// The physical model's strands go eight to a group (the CPU has
-    /// AVX-512; otherwise four).
+    /// The physical model's strands go eight to a group (AVX-512;
+    /// otherwise four).
     wide: bool,
-    /// The CPU has AVX-512: the per-strand phases use it too.
-    avx512: bool,
-    /// The CPU has AVX2: the blower runs in eight-float lanes (on an
-    /// AVX2-only farm machine too).
-    avx2: bool,
+    /// The widest instructions the lanes and the per-strand phases may
+    /// use (the baseline without `simd`).
+    instructions: Instructions,
     physical: Option<RodMaterial>,
     /// Time the phases (`Solver::set_phase_clock`).
     phase_clock: bool,
@@ -272,6 +273,7 @@ impl Solver {
         Ok(Solver {
             parameters,
             simd: true,
+            instructions: Instructions::of_this_cpu(),
             grid: EdgeGrid::default(),
             volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
@@ -293,6 +295,14 @@ impl Solver {
     #[cfg(test)]
     pub(crate) fn without_simd(mut self) -> Solver {
         self.simd = false;
+        self
+    }
+
+    /// Runs the lanes in at most `widest` (a test of a narrower path's bits
+    /// on a CPU that has wider).
+    #[cfg(test)]
+    pub(crate) fn with_instructions_at_most(mut self, widest: Instructions) -> Solver {
+        self.instructions = self.instructions.min(widest);
         self
     }
 
@@ -365,6 +375,7 @@ impl Solver {
             volume,
             dispatch,
             simd,
+            instructions,
             phase_clock,
             ..
         } = self;
@@ -377,8 +388,14 @@ impl Solver {
                 .map(|(s, f)| *s && !*f),
         );
         let active = dispatch.active.as_slice();
+        let instructions = if *simd {
+            *instructions
+        } else {
+            Instructions::Baseline
+        };
         let volumetric = parameters.volumetric.map(|settings| {
             volume.build(
+                instructions,
                 &strands.positions,
                 &strands.velocities,
                 &strands.radii,
@@ -449,9 +466,8 @@ impl Solver {
             colliders: &prepared,
             root_transform: strands.root_transform,
             simd: *simd,
-            wide: *simd && strands.material.model == Model::Physical && wide_lanes_available(),
-            avx512: *simd && wide_lanes_available(),
-            avx2: *simd && avx2_available(),
+            wide: *simd && strands.material.model == Model::Physical && instructions.avx512(),
+            instructions,
             physical: match strands.material.model {
                 Model::Paper => None,
                 Model::Physical => Some(RodMaterial {
@@ -624,8 +640,8 @@ impl StrandMut<'_> {
 }
 
 /// Defines a phase that runs its body (an `#[inline(always)]` function of
-/// the strand) compiled for the widest instructions the CPU has: AVX-512
-/// (`ctx.avx512`), else AVX2 (`ctx.avx2`), else the baseline. The same
+/// the strand) compiled for the widest instructions the solver may use
+/// (`ctx.instructions`): AVX-512, AVX2 or the baseline. The same
 /// operations, no FMA: the same bits; the wider the instructions, the more
 /// of the loops the compiler vectorises.
 macro_rules! phase_in_widest_instructions {
@@ -647,12 +663,12 @@ macro_rules! phase_in_widest_instructions {
                 fn avx2($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
                     $body
                 }
-                if $ctx.avx512 {
-                    // SAFETY: the CPU has AVX-512F (`ctx.avx512`).
+                if $ctx.instructions.avx512() {
+                    // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
                     return unsafe { avx512($ctx $(, $arg)*) };
                 }
-                if $ctx.avx2 {
-                    // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+                if $ctx.instructions.avx2() {
+                    // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
                     return unsafe { avx2($ctx $(, $arg)*) };
                 }
             }
@@ -777,8 +793,8 @@ fn blow(ctx: &Context<'_>, blower: &Blower, s: &StrandMut<'_>, work: &mut Work) 
     #[allow(unused_mut)]
     let mut done = 0;
     #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: the CPU has AVX2 (`ctx.avx2`).
+    if ctx.instructions.avx2() {
+        // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
         done = unsafe { blow_eights(blower, s.positions, ctx.dt, work) };
     }
     for i in done..n {
@@ -892,8 +908,9 @@ fn rest_shape_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
 /// strand by strand.
 fn rest_shapes_in_lanes(ctx: &Context<'_>, strands: &[StrandMut<'_>], works: &mut [Work]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if ctx.avx512 && strands.len() == WIDE && works.len() >= WIDE {
-        // SAFETY: the CPU has AVX-512F (`ctx.avx512`), and with it AVX2.
+    if ctx.instructions.avx512() && strands.len() == WIDE && works.len() >= WIDE {
+        // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`), and
+        // with it AVX2.
         unsafe { rest_shapes_avx512(ctx, strands, works) };
         return true;
     }
@@ -1271,10 +1288,10 @@ fn newton_iterations<T: Real>(
     let mut progress = [Progress::Iterating; WIDE];
     let mut iteration = 0;
     while progress[..lanes].iter().any(|p| *p != Progress::Done) {
-        direct.iterate_lanes();
+        direct.iterate_lanes(ctx.instructions);
         iteration += 1;
         let unconverged = (ctx.tolerance > 0.0 && iteration < ctx.iterations)
-            .then(|| direct.unconverged_lanes(ctx.tolerance));
+            .then(|| direct.unconverged_lanes(ctx.instructions, ctx.tolerance));
         for (lane, work) in works.iter_mut().take(lanes).enumerate() {
             match progress[lane] {
                 Progress::Done => {}
@@ -1343,7 +1360,7 @@ fn step_group_direct<T: Real>(
         let lane = lane % T::WIDTH;
         direct_input(ctx, material, &strands[lane], &works[lane])
     });
-    direct.begin_lanes(&inputs[..T::WIDTH]);
+    direct.begin_lanes(ctx.instructions, &inputs[..T::WIDTH]);
     newton_iterations(ctx, works, direct, n);
     {
         let mut lanes = works.iter_mut().take(T::WIDTH);
@@ -1397,84 +1414,6 @@ fn finish_group(
     if let Some(first) = works.first_mut() {
         first.phases += phases;
     }
-}
-
-/// Whether the lanes may use AVX-512F: the CPU has it (the widest path of
-/// the eight-wide solve and the per-strand phases; also what the volume
-/// grid is compiled for), and no test has turned it off.
-pub(super) fn wide_lanes_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f") && !avx512_turned_off()
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// Tests turn AVX-512 off (`AvxTwoOnly`) to check the AVX2 path's bits on
-/// a CPU that has both; every path gives the same bits, so other tests
-/// running meanwhile only take another path to the same results.
-#[cfg(test)]
-static AVX512_OFF: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-#[inline]
-fn avx512_turned_off() -> bool {
-    #[cfg(test)]
-    {
-        AVX512_OFF.load(std::sync::atomic::Ordering::Relaxed)
-    }
-    #[cfg(not(test))]
-    {
-        false
-    }
-}
-
-/// While alive, the lanes take the AVX2 path even on a CPU with AVX-512.
-#[cfg(test)]
-pub(super) struct AvxTwoOnly;
-
-#[cfg(test)]
-impl AvxTwoOnly {
-    pub(super) fn new() -> Self {
-        AVX512_OFF.store(true, std::sync::atomic::Ordering::Relaxed);
-        AvxTwoOnly
-    }
-}
-
-#[cfg(test)]
-impl Drop for AvxTwoOnly {
-    fn drop(&mut self) {
-        AVX512_OFF.store(false, std::sync::atomic::Ordering::Relaxed);
-    }
-}
-
-/// Whether the CPU has AVX2: the groups of four's f64 lanes, the blower's
-/// lanes and the per-strand phases where there is no AVX-512. (Groups of
-/// eight as two AVX2 registers a lane took fewer instructions but four
-/// times the L2 misses on a CPU with 512 KB of L2: not faster.)
-pub(super) fn avx2_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// The widest instructions the solver's lanes run in on this CPU: AVX-512
-/// (eight-wide), AVX2 (four-wide) or the baseline (what `bench` reports).
-pub fn solver_instructions() -> &'static str {
-    if wide_lanes_available() {
-        return "AVX-512";
-    }
-    if avx2_available() {
-        return "AVX2";
-    }
-    "baseline"
 }
 
 /// Up to eight strands' steps: the physical model's direct solve of all

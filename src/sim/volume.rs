@@ -21,10 +21,10 @@
 //! order are fixed; the changes are only read. Buffers are kept from step
 //! to step (no allocation once warm, unless the hair's box grows).
 
+use super::instructions::Instructions;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::eight_to_lanes;
 use super::math::{is_finite3, V3};
-use super::step::wide_lanes_available;
 use serde::{Deserialize, Serialize};
 
 /// The settings of the volumetric mode (units in the names' docs).
@@ -316,13 +316,22 @@ fn clear_spans(nodes: &mut [Node], spans: &[Span], row_length: usize) {
 
 /// Spreads the vertices of `strands` (in that order) on `nodes`, widening
 /// each row's span over the nodes written.
-fn spread(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
+fn spread(instructions: Instructions, strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
     #[cfg(target_arch = "x86_64")]
-    if wide_lanes_available() {
-        // SAFETY: the CPU has AVX-512F.
-        unsafe { spread_avx512(strands, hair, grid, out) };
-        return;
+    {
+        if instructions.avx512() {
+            // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
+            unsafe { spread_avx512(strands, hair, grid, out) };
+            return;
+        }
+        if instructions.avx2() {
+            // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
+            unsafe { spread_avx2(strands, hair, grid, out) };
+            return;
+        }
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = instructions;
     spread_strands(strands, hair, grid, out);
 }
 
@@ -334,11 +343,17 @@ struct Spread<'a> {
     places: &'a mut [Place],
 }
 
-/// `spread` in the CPU's widest instructions (the same operations, no
-/// FMA: the same bits).
+/// `spread` in AVX-512 (the same operations, no FMA: the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 fn spread_avx512(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
+    spread_strands(strands, hair, grid, out);
+}
+
+/// `spread` in AVX2 (the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn spread_avx2(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
     spread_strands(strands, hair, grid, out);
 }
 
@@ -431,6 +446,8 @@ struct Hair<'a> {
 /// and `starts` as in [`VolumeGrid`], `offsets` as in StrandSet) and the
 /// step's settings.
 struct Gather<'a> {
+    /// The widest the gather may use (AVX2 or wider: in lanes).
+    instructions: Instructions,
     grid: Placement,
     nodes: &'a [Node],
     places: &'a [Place],
@@ -451,18 +468,31 @@ impl Gather<'_> {
     /// grid).
     fn chunk(&self, first: usize, out: &mut [V3]) {
         #[cfg(target_arch = "x86_64")]
-        if wide_lanes_available() {
-            // SAFETY: the CPU has AVX-512F.
-            return unsafe { self.chunk_avx512(first, out) };
+        {
+            if self.instructions.avx512() {
+                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
+                return unsafe { self.chunk_avx512(first, out) };
+            }
+            if self.instructions.avx2() {
+                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
+                return unsafe { self.chunk_avx2(first, out) };
+            }
         }
         self.chunk_slots::<false>(first, out)
     }
 
-    /// `chunk` in the CPU's widest instructions (the same operations, no
-    /// FMA: the same bits), eight slots at a time in the lanes.
+    /// `chunk` in AVX-512 (the same operations, no FMA: the same bits),
+    /// eight slots at a time in the lanes.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     fn chunk_avx512(&self, first: usize, out: &mut [V3]) {
+        self.chunk_slots::<true>(first, out)
+    }
+
+    /// `chunk` in AVX2, eight slots at a time in the lanes (the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn chunk_avx2(&self, first: usize, out: &mut [V3]) {
         self.chunk_slots::<true>(first, out)
     }
 
@@ -489,7 +519,7 @@ impl Gather<'_> {
                     self.prefetch(slot + l + PREFETCH_AHEAD);
                 }
                 // SAFETY: `LANES` is only set in code compiled for
-                // AVX-512F, which the CPU has (and with it AVX2).
+                // AVX2 or AVX-512F, which the CPU has.
                 if !unsafe { self.eight(slot, &vertices, block) } {
                     for (l, dv) in block.iter_mut().enumerate() {
                         *dv = self.change_at(slot + l, vertices[l]).unwrap_or([0.0; 3]);
@@ -726,6 +756,7 @@ impl VolumeGrid {
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         &mut self,
+        instructions: Instructions,
         positions: &[V3],
         velocities: &[V3],
         radii: &[f32],
@@ -759,9 +790,9 @@ impl VolumeGrid {
             offsets,
         };
         self.order_strands(positions, offsets, active);
-        self.scatter(&hair);
+        self.scatter(instructions, &hair);
         self.sum_ranges();
-        self.gather(velocities, offsets, settings, cell, dt);
+        self.gather(instructions, velocities, offsets, settings, cell, dt);
         self.clear();
     }
 
@@ -808,7 +839,7 @@ impl VolumeGrid {
     }
 
     /// Each fixed range of ordered strands onto its own grid, in order.
-    fn scatter(&mut self, hair: &Hair) {
+    fn scatter(&mut self, instructions: Instructions, hair: &Hair) {
         use rayon::prelude::*;
         let grid = self.grid;
         if self.partial.len() < RANGES {
@@ -838,6 +869,7 @@ impl VolumeGrid {
                 let first = (r * per_range).min(order.len());
                 let last = ((r + 1) * per_range).min(order.len());
                 spread(
+                    instructions,
                     &order[first..last],
                     hair,
                     &grid,
@@ -885,6 +917,7 @@ impl VolumeGrid {
     /// strand in the spreading order (the nodes are then in cache).
     fn gather(
         &mut self,
+        instructions: Instructions,
         velocities: &[V3],
         offsets: &[usize],
         settings: &Volumetric,
@@ -897,6 +930,7 @@ impl VolumeGrid {
         let push = settings.repulsion * dt;
         let scale = grid.inv_cell / (cell * cell * cell);
         let gather = Gather {
+            instructions,
             grid,
             nodes: &self.partial[0].nodes,
             places: &self.places,
@@ -1078,6 +1112,7 @@ mod tests {
             pool.install(|| {
                 let mut grid = VolumeGrid::default();
                 grid.build(
+                    Instructions::of_this_cpu(),
                     &set.positions,
                     &velocities,
                     &set.radii,
@@ -1100,16 +1135,17 @@ mod tests {
         assert_eq!(one, run(3));
     }
 
-    /// The gather eight slots at a time in the lanes gives the bits of the
-    /// gather one slot at a time: random nodes (some empty, some with a
-    /// negative or non-finite volume), places on and off the grid, and
-    /// velocities with infinities and NaNs, over strands of uneven length.
+    /// The gather eight slots at a time in the lanes, in AVX2 and (where
+    /// the CPU has it) AVX-512, gives the bits of the gather one slot at a
+    /// time: random nodes (some empty, some with a negative or non-finite
+    /// volume), places on and off the grid, and velocities with infinities
+    /// and NaNs, over strands of uneven length.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_gather_in_lanes_is_the_gather_one_slot_at_a_time() {
-        // The CPU, not `wide_lanes_available`: a test turning AVX-512 off
-        // meanwhile must not skip this one.
-        if !std::arch::is_x86_feature_detected!("avx512f") {
+        let widest = Instructions::of_this_cpu();
+        if !widest.avx2() {
+            eprintln!("no AVX2 on this CPU: no lanes to test");
             return;
         }
         let mut next = crate::sim::test_sequence(0x2545_f491_4f6c_dd1d);
@@ -1161,7 +1197,8 @@ mod tests {
                 _ => [next() - 0.5, next() - 0.5, next() - 0.5],
             })
             .collect();
-        let gather = Gather {
+        let gather = |instructions| Gather {
+            instructions,
             grid,
             nodes: &nodes,
             places: &places,
@@ -1178,14 +1215,20 @@ mod tests {
                 .flat_map(|v| v.map(f32::to_bits))
                 .collect::<Vec<_>>()
         };
-        for first in [0, 3, 8, 100] {
-            let mut one = vec![[1.0; 3]; vertices - first];
-            gather.chunk_slots::<false>(first, &mut one);
-            let mut lanes = vec![[2.0; 3]; vertices - first];
-            // SAFETY: the CPU has AVX-512F (checked above).
-            unsafe { gather.chunk_avx512(first, &mut lanes) };
-            assert_eq!(bits(&one), bits(&lanes), "from slot {first}");
-            assert!(one.iter().any(|v| v[0] != 0.0));
+        let wider = [Instructions::Avx2, Instructions::Avx512];
+        for instructions in wider.into_iter().filter(|i| *i <= widest) {
+            for first in [0, 3, 8, 100] {
+                let mut one = vec![[1.0; 3]; vertices - first];
+                gather(Instructions::Baseline).chunk(first, &mut one);
+                let mut lanes = vec![[2.0; 3]; vertices - first];
+                gather(instructions).chunk(first, &mut lanes);
+                assert_eq!(
+                    bits(&one),
+                    bits(&lanes),
+                    "{instructions:?} from slot {first}"
+                );
+                assert!(one.iter().any(|v| v[0] != 0.0));
+            }
         }
     }
 }

@@ -1,0 +1,61 @@
+//! The widest instructions the solver's lanes may run in: found once per
+//! [`Solver`](super::Solver) from the CPU, then passed down with the step's
+//! context, so every phase of a step takes the same choice and a test can
+//! lower it for one solver (to check the AVX2 path's bits on a CPU with
+//! AVX-512) without touching any other solver in the process.
+//!
+//! Every path does the same IEEE operations in the same order (no FMA), so
+//! the choice changes the speed, never a bit of a result.
+
+/// An instruction set of the lanes, narrowest first (so `min` lowers a
+/// choice).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Instructions {
+    /// What every x86-64 (or other) CPU runs: SSE2 on x86-64.
+    Baseline,
+    /// AVX2: the groups of four's f64 lanes, the blower's and the
+    /// volumetric grid's eight-float lanes, the per-strand phases.
+    /// (Groups of eight as two AVX2 registers a lane took fewer
+    /// instructions but four times the L2 misses on a CPU with 512 KB of
+    /// L2: not faster.)
+    Avx2,
+    /// AVX-512F: also the groups of eight and the rest shape in lanes.
+    Avx512,
+}
+
+impl Instructions {
+    /// The widest this CPU has.
+    pub fn of_this_cpu() -> Instructions {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                return Instructions::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return Instructions::Avx2;
+            }
+        }
+        Instructions::Baseline
+    }
+
+    /// AVX-512F may be used (and with it AVX2).
+    #[inline]
+    pub fn avx512(self) -> bool {
+        self == Instructions::Avx512
+    }
+
+    /// AVX2 may be used.
+    #[inline]
+    pub fn avx2(self) -> bool {
+        self >= Instructions::Avx2
+    }
+
+    /// The name `bench` reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Instructions::Baseline => "baseline",
+            Instructions::Avx2 => "AVX2",
+            Instructions::Avx512 => "AVX-512",
+        }
+    }
+}
