@@ -8,7 +8,9 @@
 //! the choice changes the speed, never a bit of a result.
 
 /// An instruction set of the lanes, narrowest first (so `min` lowers a
-/// choice).
+/// choice). The phases' dispatch runs code compiled for the set it is given
+/// (`unsafe`), so a set must come from [`Instructions::of_this_cpu`],
+/// perhaps lowered: never wider than the CPU's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Instructions {
     /// What every x86-64 (or other) CPU runs: SSE2 on x86-64.
