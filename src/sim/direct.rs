@@ -26,7 +26,7 @@
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::instructions::Instructions;
+use super::instructions::{in_widest, Instructions};
 use super::lanes::Real;
 use super::math::{Quat, V3};
 use super::state::JointState;
@@ -1001,98 +1001,46 @@ impl<T: Real> Direct<T> {
     /// (AVX-512 for eight, AVX2 for four; the same operations in wider
     /// registers, no FMA, so the same bits).
     pub fn iterate_lanes(&mut self, instructions: Instructions) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if T::WIDTH >= 8 && instructions.avx512() {
-                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-                unsafe { self.iterate_avx512() };
-                return;
-            }
-            if instructions.avx2() {
-                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-                unsafe { self.iterate_avx2() };
-                return;
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = instructions;
-        self.iterate();
+        let lanes = self;
+        in_widest!(Self::widest(instructions, 1), fn<T: Real>(lanes: &mut Direct<T>) {
+            lanes.iterate()
+        })
     }
 
     /// [`Direct::begin`] in the widest of `instructions` (the
     /// same bits).
     pub fn begin_lanes(&mut self, instructions: Instructions, strands: &[DirectInput<'_>]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if T::WIDTH >= 8 && instructions.avx512() {
-                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-                unsafe { self.begin_avx512(strands) };
-                return;
+        let lanes = self;
+        in_widest!(
+            Self::widest(instructions, 4),
+            fn<T: Real>(lanes: &mut Direct<T>, strands: &[DirectInput<'_>]) {
+                lanes.begin(strands)
             }
-            if T::WIDTH >= 4 && instructions.avx2() {
-                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-                unsafe { self.begin_avx2(strands) };
-                return;
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = instructions;
-        self.begin(strands);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn begin_avx512(&mut self, strands: &[DirectInput<'_>]) {
-        self.begin(strands);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn begin_avx2(&mut self, strands: &[DirectInput<'_>]) {
-        self.begin(strands);
+        )
     }
 
     /// [`Direct::unconverged`] in the widest of `instructions`
     /// (the same bits).
     pub fn unconverged_lanes(&self, instructions: Instructions, tolerance: f64) -> T {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if T::WIDTH >= 8 && instructions.avx512() {
-                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-                return unsafe { self.unconverged_avx512(tolerance) };
+        let lanes = self;
+        in_widest!(
+            Self::widest(instructions, 1),
+            fn<T: Real>(lanes: &Direct<T>, tolerance: f64) -> T {
+                lanes.unconverged(tolerance)
             }
-            if instructions.avx2() {
-                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-                return unsafe { self.unconverged_avx2(tolerance) };
-            }
+        )
+    }
+
+    /// The widest of `instructions` for these lanes: AVX-512 only for
+    /// eight, AVX2 only from `avx2_from` lanes.
+    fn widest(instructions: Instructions, avx2_from: usize) -> Instructions {
+        if T::WIDTH >= 8 {
+            instructions
+        } else if T::WIDTH >= avx2_from {
+            instructions.min(Instructions::Avx2)
+        } else {
+            Instructions::Baseline
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = instructions;
-        self.unconverged(tolerance)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn unconverged_avx2(&self, tolerance: f64) -> T {
-        self.unconverged(tolerance)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn unconverged_avx512(&self, tolerance: f64) -> T {
-        self.unconverged(tolerance)
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn iterate_avx2(&mut self) {
-        self.iterate();
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn iterate_avx512(&mut self) {
-        self.iterate();
     }
 }
 

@@ -6,6 +6,9 @@
 //!
 //! Every path does the same IEEE operations in the same order (no FMA), so
 //! the choice changes the speed, never a bit of a result.
+//!
+//! [`in_widest!`] is the one dispatch: a body written once, compiled for
+//! each set, run in the widest the choice allows.
 
 /// An instruction set of the lanes, narrowest first (so `min` lowers a
 /// choice). The phases' dispatch runs code compiled for the set it is given
@@ -61,3 +64,65 @@ impl Instructions {
         }
     }
 }
+
+/// Runs a body compiled for the widest instructions of a set: AVX-512F,
+/// AVX2, else the baseline. The body is written once as a function of the
+/// named locals (a function, not a closure: only a function can be
+/// compiled for other instructions), and compiled once per set; every
+/// path does the same operations in the same order (no FMA), so the set
+/// changes the speed, never a bit. The body should be, or call, code that
+/// is `#[inline(always)]`, so that it is compiled in the wider
+/// instructions too.
+///
+/// `in_widest!(set, fn<T: Bound>(a: A, b: B) -> R { ... })`: the generic
+/// parameters are optional. `in_widest!(set, fn<const WIDE; T: Bound>(...)
+/// ...)` also gives the body a `const WIDE: bool`, true in AVX2 or wider,
+/// for code written in intrinsics that no baseline CPU has.
+///
+/// The set must come from [`Instructions::of_this_cpu`], perhaps lowered:
+/// the dispatch is `unsafe`, sound only on a CPU that has the set.
+macro_rules! in_widest {
+    (
+        $set:expr,
+        fn $(<$($g:ident: $bound:path),* $(,)?>)?
+        ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block
+    ) => {
+        $crate::sim::instructions::in_widest!(
+            $set,
+            fn<const _WIDE; $($($g: $bound),*)?>($($arg: $ty),*) $(-> $ret)? $body
+        )
+    };
+    (
+        $set:expr,
+        fn<const $wide:ident; $($g:ident: $bound:path),* $(,)?>
+        ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? $body:block
+    ) => {{
+        #[inline(always)]
+        fn body<const $wide: bool, $($g: $bound),*>($($arg: $ty),*) $(-> $ret)? $body
+        #[inline(always)]
+        fn baseline<$($g: $bound),*>($($arg: $ty),*) $(-> $ret)? {
+            body::<false, $($g),*>($($arg),*)
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        fn avx2<$($g: $bound),*>($($arg: $ty),*) $(-> $ret)? {
+            body::<true, $($g),*>($($arg),*)
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        fn avx512<$($g: $bound),*>($($arg: $ty),*) $(-> $ret)? {
+            body::<true, $($g),*>($($arg),*)
+        }
+        match $set {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the set comes from `Instructions::of_this_cpu`: the CPU
+            // has AVX-512F.
+            $crate::sim::Instructions::Avx512 => unsafe { avx512($($arg),*) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above, the CPU has AVX2.
+            $crate::sim::Instructions::Avx2 => unsafe { avx2($($arg),*) },
+            _ => baseline($($arg),*),
+        }
+    }};
+}
+pub(crate) use in_widest;

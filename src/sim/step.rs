@@ -25,7 +25,7 @@ use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMa
 #[cfg(target_arch = "x86_64")]
 use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
-use super::instructions::Instructions;
+use super::instructions::{in_widest, Instructions};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
@@ -466,7 +466,8 @@ impl Solver {
             colliders: &prepared,
             root_transform: strands.root_transform,
             simd: *simd,
-            wide: *simd && strands.material.model == Model::Physical && instructions.avx512(),
+            // (`instructions` is the baseline without `simd`.)
+            wide: strands.material.model == Model::Physical && instructions.avx512(),
             instructions,
             physical: match strands.material.model {
                 Model::Paper => None,
@@ -639,48 +640,12 @@ impl StrandMut<'_> {
     }
 }
 
-/// Defines a phase that runs its body (an `#[inline(always)]` function of
-/// the strand) compiled for the widest instructions the solver may use
-/// (`ctx.instructions`): AVX-512, AVX2 or the baseline. The same
-/// operations, no FMA: the same bits; the wider the instructions, the more
-/// of the loops the compiler vectorises.
-macro_rules! phase_in_widest_instructions {
-    (
-        $(#[$doc:meta])*
-        fn $name:ident($ctx:ident: $ctx_ty:ty $(, $arg:ident: $ty:ty)*) $(-> $ret:ty)? => $body:expr
-    ) => {
-        $(#[$doc])*
-        fn $name($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx512f")]
-                #[allow(unused_variables)]
-                fn avx512($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
-                    $body
-                }
-                #[target_feature(enable = "avx2")]
-                #[allow(unused_variables)]
-                fn avx2($ctx: $ctx_ty $(, $arg: $ty)*) $(-> $ret)? {
-                    $body
-                }
-                if $ctx.instructions.avx512() {
-                    // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-                    return unsafe { avx512($ctx $(, $arg)*) };
-                }
-                if $ctx.instructions.avx2() {
-                    // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-                    return unsafe { avx2($ctx $(, $arg)*) };
-                }
-            }
-            $body
-        }
-    };
-}
-
-phase_in_widest_instructions! {
-    /// (ii) of the step, the "forces" phase: external forces and the
-    /// predicted positions and frames in the working copy.
-    fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) => predict_strand(ctx, s, work)
+/// (ii) of the step, the "forces" phase: external forces and the
+/// predicted positions and frames in the working copy.
+fn predict(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    in_widest!(ctx.instructions, fn(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+        predict_strand(ctx, s, work)
+    })
 }
 
 #[inline(always)]
@@ -866,11 +831,13 @@ fn blow_eights(blower: &Blower, positions: &[V3], dt: f32, work: &mut Work) -> u
     start
 }
 
-phase_in_widest_instructions! {
-    /// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
-    /// shape from the bonds (15), after `predict` (which fills the old frames
-    /// and, with a blower, the drying rates).
-    fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) => rest_shape_strand(ctx, s, work)
+/// (iii) of the step, the "bonds" phase: bond-rate changes and the rest
+/// shape from the bonds (15), after `predict` (which fills the old frames
+/// and, with a blower, the drying rates).
+fn rest_shape(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+    in_widest!(ctx.instructions, fn(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
+        rest_shape_strand(ctx, s, work)
+    })
 }
 
 #[inline(always)]
@@ -1550,10 +1517,12 @@ fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool)
     }
 }
 
-phase_in_widest_instructions! {
-    /// (vi) Velocities from the position change; returns whether the new
-    /// state is finite (the strand is committed only then).
-    fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool => velocities_strand(ctx, work, n)
+/// (vi) Velocities from the position change; returns whether the new
+/// state is finite (the strand is committed only then).
+fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
+    in_widest!(ctx.instructions, fn(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
+        velocities_strand(ctx, work, n)
+    })
 }
 
 #[inline(always)]
@@ -1592,10 +1561,12 @@ fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
     all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m])
 }
 
-phase_in_widest_instructions! {
-    /// (v) of the step, the end of the "bonds" phase: the bond update (17)
-    /// with the shape after the projection.
-    fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) => update_bonds_strand(s, work)
+/// (v) of the step, the end of the "bonds" phase: the bond update (17)
+/// with the shape after the projection.
+fn update_bonds(ctx: &Context<'_>, s: &mut StrandMut<'_>, work: &Work) {
+    in_widest!(ctx.instructions, fn(s: &mut StrandMut<'_>, work: &Work) {
+        update_bonds_strand(s, work)
+    })
 }
 
 #[inline(always)]

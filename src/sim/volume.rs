@@ -21,7 +21,7 @@
 //! order are fixed; the changes are only read. Buffers are kept from step
 //! to step (no allocation once warm, unless the hair's box grows).
 
-use super::instructions::Instructions;
+use super::instructions::{in_widest, Instructions};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::eight_to_lanes;
 use super::math::{is_finite3, V3};
@@ -317,22 +317,12 @@ fn clear_spans(nodes: &mut [Node], spans: &[Span], row_length: usize) {
 /// Spreads the vertices of `strands` (in that order) on `nodes`, widening
 /// each row's span over the nodes written.
 fn spread(instructions: Instructions, strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if instructions.avx512() {
-            // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-            unsafe { spread_avx512(strands, hair, grid, out) };
-            return;
+    in_widest!(
+        instructions,
+        fn(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
+            spread_strands(strands, hair, grid, out)
         }
-        if instructions.avx2() {
-            // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-            unsafe { spread_avx2(strands, hair, grid, out) };
-            return;
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = instructions;
-    spread_strands(strands, hair, grid, out);
+    )
 }
 
 /// What one range's spreading writes: its grid, each row's span, and the
@@ -341,20 +331,6 @@ struct Spread<'a> {
     nodes: &'a mut [Node],
     spans: &'a mut [Span],
     places: &'a mut [Place],
-}
-
-/// `spread` in AVX-512 (the same operations, no FMA: the same bits).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn spread_avx512(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
-    spread_strands(strands, hair, grid, out);
-}
-
-/// `spread` in AVX2 (the same bits).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn spread_avx2(strands: &[u32], hair: &Hair, grid: &Placement, out: Spread) {
-    spread_strands(strands, hair, grid, out);
 }
 
 #[inline(always)]
@@ -466,34 +442,15 @@ struct Gather<'a> {
 impl Gather<'_> {
     /// The changes of ordered slots `first..` into `out` (zero off the
     /// grid).
+    /// In AVX2 or wider, eight slots at a time in the lanes.
     fn chunk(&self, first: usize, out: &mut [V3]) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if self.instructions.avx512() {
-                // SAFETY: the CPU has AVX-512F (`Instructions::of_this_cpu`).
-                return unsafe { self.chunk_avx512(first, out) };
+        let gather = self;
+        in_widest!(
+            self.instructions,
+            fn<const WIDE;>(gather: &Gather<'_>, first: usize, out: &mut [V3]) {
+                gather.chunk_slots::<WIDE>(first, out)
             }
-            if self.instructions.avx2() {
-                // SAFETY: the CPU has AVX2 (`Instructions::of_this_cpu`).
-                return unsafe { self.chunk_avx2(first, out) };
-            }
-        }
-        self.chunk_slots::<false>(first, out)
-    }
-
-    /// `chunk` in AVX-512 (the same operations, no FMA: the same bits),
-    /// eight slots at a time in the lanes.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f")]
-    fn chunk_avx512(&self, first: usize, out: &mut [V3]) {
-        self.chunk_slots::<true>(first, out)
-    }
-
-    /// `chunk` in AVX2, eight slots at a time in the lanes (the same bits).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn chunk_avx2(&self, first: usize, out: &mut [V3]) {
-        self.chunk_slots::<true>(first, out)
+        )
     }
 
     /// `LANES`: eight slots at a time through [`Gather::eight`] (only in
