@@ -145,6 +145,7 @@ impl MeshSdf {
             total
         ];
         let mut triangles = Vec::new();
+        let mut distances = Vec::new();
         for group in pairs.chunk_by(|a, b| a.0 == b.0) {
             let c = group[0].0 as usize;
             let (x, y, z) = (
@@ -157,17 +158,28 @@ impl MeshSdf {
                 origin[1] + (y as f32 + 0.5) * cell,
                 origin[2] + (z as f32 + 0.5) * cell,
             );
+            distances.clear();
+            distances.extend(
+                group
+                    .iter()
+                    .map(|&(_, t)| mesh.triangle(t).distance_to_local_point(center, false)),
+            );
+            let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
+            // A point of the cell is at most `nearest + half_diagonal` from
+            // the surface, so its closest triangle is at most
+            // `nearest + 2 half_diagonal` from the centre (with a hair to
+            // spare for round-off): the rest can never be a point's
+            // closest. A triangle farther than band + half a diagonal from
+            // the centre is farther than band from every point of the cell.
+            let keep = (band + half_diagonal).min(nearest + 2.0 * half_diagonal + 0.01 * cell);
             let start = triangles.len();
-            let mut nearest = f32::INFINITY;
-            for &(_, t) in group {
-                let d = mesh.triangle(t).distance_to_local_point(center, false);
-                // A triangle farther than band + half a diagonal from the
-                // centre is farther than band from every point of the cell.
-                if d <= band + half_diagonal {
-                    triangles.push(t);
-                    nearest = nearest.min(d);
-                }
-            }
+            triangles.extend(
+                group
+                    .iter()
+                    .zip(&distances)
+                    .filter(|&(_, &d)| d <= keep)
+                    .map(|(&(_, t), _)| t),
+            );
             if triangles.len() > start {
                 cells[c] = Cell {
                     start: start as u32,
