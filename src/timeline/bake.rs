@@ -683,9 +683,9 @@ fn progress_bars(
 }
 
 /// Runs the timeline and writes its exports, in three phases like a
-/// physics pipeline's step: [`BakeRun::prepare`] (everything checked and
-/// every output opened before the first step), [`BakeRun::run_stages`]
-/// (the simulation, streaming animated frames) and [`BakeRun::write`] (the
+/// physics pipeline's step: `BakeRun::prepare` (everything checked and
+/// every output opened before the first step), `BakeRun::run_stages`
+/// (the simulation, streaming animated frames) and `BakeRun::write` (the
 /// final, rest, state and sheet outputs and the report's lines).
 pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, BakeError> {
     let mut builder = rayon::ThreadPoolBuilder::new();

@@ -65,7 +65,7 @@ pub fn canonical(path: &Path) -> std::io::Result<PathBuf> {
 
 /// Why `path` cannot be written, found without writing it: it is a folder,
 /// a part of its folder is a file, or the folder that exists is not
-/// writable (see [`may_write_in`]).
+/// writable (see `may_write_in`).
 pub fn check_writable(path: &Path) -> Result<(), String> {
     if path.is_dir() {
         return Err("is a folder, not a file".into());
