@@ -79,6 +79,20 @@ type Frame3 = Option<[V3; 3]>;
 /// The axes of space, a frame that turns nothing.
 const IDENTITY: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
+/// Render strands interpolated per parallel task: enough to outweigh a
+/// task's cost, few enough that the cores share even a thousand strands.
+const STRANDS_PER_RUN: usize = 256;
+
+/// The guides of one pose, as render strands read them.
+#[derive(Clone, Copy)]
+struct Guides<'a> {
+    points: &'a [V3],
+    /// Where each guide's points start (and the end).
+    offsets: &'a [usize],
+    /// Each guide's root tangent.
+    directions: &'a [V3],
+}
+
 /// The rotation of a render strand's root from rest to now.
 enum Turn {
     /// From the rest frame to the current one.
@@ -456,73 +470,104 @@ impl RenderHair {
     }
 
     /// The render strands' points for a pose of the guides (`guide_counts`
-    /// as the guides the hair was built from).
+    /// as the guides the hair was built from). Strands are found in
+    /// parallel in fixed runs, each exactly as alone, so the points do not
+    /// depend on the thread count.
     pub fn points(&self, guide_counts: &[u32], guide_points: &[V3]) -> Vec<V3> {
-        let mut out = Vec::with_capacity(self.vertex_count());
+        use rayon::prelude::*;
         if guide_counts.is_empty() {
-            return out;
+            return Vec::new();
         }
         let (offsets, directions) = roots_and_directions(guide_counts, guide_points);
+        let guides = Guides {
+            points: guide_points,
+            offsets: &offsets,
+            directions: &directions,
+        };
+        let mut out = vec![[0.0; 3]; self.vertex_count()];
+        // Each run's strands, its first vertex and its slice of `out`.
+        let mut runs = Vec::with_capacity(self.counts.len().div_ceil(STRANDS_PER_RUN));
+        let mut rest = out.as_mut_slice();
+        let mut first_vertex = 0;
+        for (run, counts) in self.counts.chunks(STRANDS_PER_RUN).enumerate() {
+            let size: usize = counts.iter().map(|&c| c as usize).sum();
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(size);
+            rest = tail;
+            runs.push((run * STRANDS_PER_RUN, first_vertex, mine));
+            first_vertex += size;
+        }
+        runs.into_par_iter()
+            .for_each(|(first_strand, mut vertex, run_out)| {
+                let mut at = 0;
+                let last = (first_strand + STRANDS_PER_RUN).min(self.counts.len());
+                for r in first_strand..last {
+                    let n = self.counts[r] as usize;
+                    self.strand_points(r, &guides, vertex, &mut run_out[at..at + n]);
+                    at += n;
+                    vertex += n;
+                }
+            });
+        out
+    }
+
+    /// Render strand `r`'s points into `out`, its first vertex being
+    /// `first_vertex` of all (where its details start).
+    fn strand_points(&self, r: usize, guides: &Guides<'_>, first_vertex: usize, out: &mut [V3]) {
+        let Guides {
+            points: guide_points,
+            offsets,
+            directions,
+        } = *guides;
         let strand =
             |g: usize| -> &[V3] { guide_points.get(offsets[g]..offsets[g + 1]).unwrap_or(&[]) };
-        let mut detail_at = 0usize;
-        for r in 0..self.counts.len() {
-            let (blended_root, direction) =
-                self.blend_roots(r, guide_points, &offsets, &directions);
-            // The render strand's frame turns with its guides.
-            let turn = Turn::new(
-                self.rest_frames[r],
-                (self.frame(r, guide_points, &offsets, direction), direction),
-            );
-            let scalp_turn = match (
-                self.rest_scalp_frames[r],
-                self.scalp_frame(r, guide_points, &offsets),
-            ) {
-                (Some(rest), Some(now)) => Turn::Frames(rest, now),
-                _ => Turn::Frames(IDENTITY, IDENTITY),
+        let (blended_root, direction) = self.blend_roots(r, guide_points, offsets, directions);
+        // The render strand's frame turns with its guides.
+        let turn = Turn::new(
+            self.rest_frames[r],
+            (self.frame(r, guide_points, offsets, direction), direction),
+        );
+        let scalp_turn = match (
+            self.rest_scalp_frames[r],
+            self.scalp_frame(r, guide_points, offsets),
+        ) {
+            (Some(rest), Some(now)) => Turn::Frames(rest, now),
+            _ => Turn::Frames(IDENTITY, IDENTITY),
+        };
+        let root = add(blended_root, scalp_turn.apply(self.root_offsets[r]));
+        let lean = turn.apply(self.leans[r]);
+        let frames: [(usize, MinimalRotation, f32); 3] = std::array::from_fn(|k| {
+            let g = self.closest[r][k] as usize;
+            (
+                g,
+                MinimalRotation::new(directions[g], direction),
+                self.weights[r][k],
+            )
+        });
+        let n = out.len();
+        for (i, point) in out.iter_mut().enumerate() {
+            let u = if n > 1 {
+                i as f32 / (n - 1) as f32
+            } else {
+                0.0
             };
-            let root = add(blended_root, scalp_turn.apply(self.root_offsets[r]));
-            let lean = turn.apply(self.leans[r]);
-            let frames: Vec<(usize, MinimalRotation, f32)> = self.closest[r]
-                .iter()
-                .zip(&self.weights[r])
-                .map(|(&g, &w)| {
-                    (
-                        g as usize,
-                        MinimalRotation::new(directions[g as usize], direction),
-                        w,
-                    )
-                })
-                .collect();
-            let n = self.counts[r] as usize;
-            for i in 0..n {
-                let u = if n > 1 {
-                    i as f32 / (n - 1) as f32
-                } else {
-                    0.0
-                };
-                let mut local = [0.0; 3];
-                for &(g, rotation, w) in &frames {
-                    let s = strand(g);
-                    let from_root = sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3]));
-                    local = add(local, scale(rotation.apply(from_root), w));
-                }
-                if self.clump > 0.0 {
-                    let (g, rotation, _) = frames[0];
-                    let s = strand(g);
-                    let own =
-                        rotation.apply(sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3])));
-                    local = add(local, scale(sub(own, local), self.clump * u));
-                }
-                local = add(local, scale(lean, u));
-                if let Some(&d) = self.details.get(detail_at) {
-                    local = add(local, turn.apply(d));
-                }
-                detail_at += 1;
-                out.push(add(root, local));
+            let mut local = [0.0; 3];
+            for &(g, rotation, w) in &frames {
+                let s = strand(g);
+                let from_root = sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3]));
+                local = add(local, scale(rotation.apply(from_root), w));
             }
+            if self.clump > 0.0 {
+                let (g, rotation, _) = frames[0];
+                let s = strand(g);
+                let own = rotation.apply(sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3])));
+                local = add(local, scale(sub(own, local), self.clump * u));
+            }
+            local = add(local, scale(lean, u));
+            if let Some(&d) = self.details.get(first_vertex + i) {
+                local = add(local, turn.apply(d));
+            }
+            *point = add(root, local);
         }
-        out
     }
 
     /// The render strands as a groom for a pose of `guides`: their points,
