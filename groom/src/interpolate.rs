@@ -470,9 +470,9 @@ impl RenderHair {
     }
 
     /// The render strands' points for a pose of the guides (`guide_counts`
-    /// as the guides the hair was built from). Strands are found in
-    /// parallel in fixed runs, each exactly as alone, so the points do not
-    /// depend on the thread count.
+    /// as the guides the hair was built from). The strands are
+    /// interpolated in parallel in fixed runs, each exactly as alone, so
+    /// the points do not depend on the thread count.
     pub fn points(&self, guide_counts: &[u32], guide_points: &[V3]) -> Vec<V3> {
         use rayon::prelude::*;
         if guide_counts.is_empty() {
