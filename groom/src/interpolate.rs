@@ -84,13 +84,38 @@ const IDENTITY: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 const STRANDS_PER_RUN: usize = 256;
 
 /// The guides of one pose, as render strands read them.
-#[derive(Clone, Copy)]
 struct Guides<'a> {
     points: &'a [V3],
     /// Where each guide's points start (and the end).
-    offsets: &'a [usize],
-    /// Each guide's root tangent.
-    directions: &'a [V3],
+    offsets: Vec<usize>,
+    /// Each guide's unit root tangent.
+    directions: Vec<V3>,
+}
+
+impl<'a> Guides<'a> {
+    fn new(counts: &[u32], points: &'a [V3]) -> Guides<'a> {
+        let (offsets, directions) = roots_and_directions(counts, points);
+        Guides {
+            points,
+            offsets,
+            directions,
+        }
+    }
+
+    /// Guide `g`'s root (the origin when the pose lacks it).
+    fn root(&self, g: usize) -> V3 {
+        self.points
+            .get(self.offsets[g])
+            .copied()
+            .unwrap_or([0.0; 3])
+    }
+
+    /// Guide `g`'s points (none when the pose lacks them).
+    fn strand(&self, g: usize) -> &[V3] {
+        self.points
+            .get(self.offsets[g]..self.offsets[g + 1])
+            .unwrap_or(&[])
+    }
 }
 
 /// The rotation of a render strand's root from rest to now.
@@ -343,8 +368,7 @@ impl RenderHair {
             .into_iter()
             .map(|c| c.map(|i| if i < g { i } else { 0 }))
             .collect();
-        let (offsets, directions) =
-            roots_and_directions(&guides.strand_vertex_counts, &guides.points);
+        let pose = Guides::new(&guides.strand_vertex_counts, &guides.points);
         let mut rng = SplitMix(options.seed ^ 0x006e_6f69_7365);
         let mut hair = RenderHair {
             closest,
@@ -359,15 +383,11 @@ impl RenderHair {
             root_uvs: None,
         };
         for (r, &root) in roots.iter().enumerate() {
-            let (blended_root, direction) =
-                hair.blend_roots(r, &guides.points, &offsets, &directions);
+            let (blended_root, direction) = hair.blend_roots(r, &pose);
             hair.root_offsets.push(sub(root, blended_root));
-            hair.rest_frames.push((
-                hair.frame(r, &guides.points, &offsets, direction),
-                direction,
-            ));
-            hair.rest_scalp_frames
-                .push(hair.scalp_frame(r, &guides.points, &offsets));
+            hair.rest_frames
+                .push((hair.frame(r, &pose, direction), direction));
+            hair.rest_scalp_frames.push(hair.scalp_frame(r, &pose));
             let lean = if options.noise > 0.0 {
                 // A random direction across the root tangent, random length.
                 let v = [rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5];
@@ -418,9 +438,9 @@ impl RenderHair {
     /// across it the direction from its nearest guide's root to the next
     /// one's (which turns with the scalp); `None` when the guides do not
     /// span one (a strand on a single guide).
-    fn frame(&self, r: usize, points: &[V3], offsets: &[usize], direction: V3) -> Frame3 {
+    fn frame(&self, r: usize, guides: &Guides<'_>, direction: V3) -> Frame3 {
         let [a, b, c] = self.closest[r];
-        let root = |g: u32| points.get(offsets[g as usize]).copied().unwrap_or([0.0; 3]);
+        let root = |g: u32| guides.root(g as usize);
         let across = [b, c].into_iter().find_map(|other| {
             let v = sub(root(other), root(a));
             normalize(sub(v, scale(direction, dot(v, direction))))
@@ -431,33 +451,23 @@ impl RenderHair {
     /// The frame of the roots of a render strand's three guides: from the
     /// first to the second, and the normal of their triangle; `None` when
     /// they span no triangle (then the offset is only translated).
-    fn scalp_frame(&self, r: usize, points: &[V3], offsets: &[usize]) -> Frame3 {
-        let root = |g: u32| points.get(offsets[g as usize]).copied().unwrap_or([0.0; 3]);
-        let [a, b, c] = self.closest[r].map(root);
+    fn scalp_frame(&self, r: usize, guides: &Guides<'_>) -> Frame3 {
+        let [a, b, c] = self.closest[r].map(|g| guides.root(g as usize));
         let x = normalize(sub(b, a))?;
         let n = normalize(cross(sub(b, a), sub(c, a)))?;
         Some([x, n, cross(x, n)])
     }
 
     /// Weighted guide roots and the normalised weighted root tangent.
-    fn blend_roots(
-        &self,
-        r: usize,
-        points: &[V3],
-        offsets: &[usize],
-        directions: &[V3],
-    ) -> (V3, V3) {
+    fn blend_roots(&self, r: usize, guides: &Guides<'_>) -> (V3, V3) {
         let mut root = [0.0; 3];
         let mut direction = [0.0; 3];
         for (&g, &w) in self.closest[r].iter().zip(&self.weights[r]) {
             let g = g as usize;
-            root = add(
-                root,
-                scale(points.get(offsets[g]).copied().unwrap_or([0.0; 3]), w),
-            );
-            direction = add(direction, scale(directions[g], w));
+            root = add(root, scale(guides.root(g), w));
+            direction = add(direction, scale(guides.directions[g], w));
         }
-        let first = directions[self.closest[r][0] as usize];
+        let first = guides.directions[self.closest[r][0] as usize];
         (root, normalize(direction).unwrap_or(first))
     }
 
@@ -478,12 +488,7 @@ impl RenderHair {
         if guide_counts.is_empty() {
             return Vec::new();
         }
-        let (offsets, directions) = roots_and_directions(guide_counts, guide_points);
-        let guides = Guides {
-            points: guide_points,
-            offsets: &offsets,
-            directions: &directions,
-        };
+        let guides = Guides::new(guide_counts, guide_points);
         let mut out = vec![[0.0; 3]; self.vertex_count()];
         // Each run's strands, its first vertex and its slice of `out`.
         let mut runs = Vec::with_capacity(self.counts.len().div_ceil(STRANDS_PER_RUN));
@@ -513,23 +518,13 @@ impl RenderHair {
     /// Render strand `r`'s points into `out`, its first vertex being
     /// `first_vertex` of all (where its details start).
     fn strand_points(&self, r: usize, guides: &Guides<'_>, first_vertex: usize, out: &mut [V3]) {
-        let Guides {
-            points: guide_points,
-            offsets,
-            directions,
-        } = *guides;
-        let strand =
-            |g: usize| -> &[V3] { guide_points.get(offsets[g]..offsets[g + 1]).unwrap_or(&[]) };
-        let (blended_root, direction) = self.blend_roots(r, guide_points, offsets, directions);
+        let (blended_root, direction) = self.blend_roots(r, guides);
         // The render strand's frame turns with its guides.
         let turn = Turn::new(
             self.rest_frames[r],
-            (self.frame(r, guide_points, offsets, direction), direction),
+            (self.frame(r, guides, direction), direction),
         );
-        let scalp_turn = match (
-            self.rest_scalp_frames[r],
-            self.scalp_frame(r, guide_points, offsets),
-        ) {
+        let scalp_turn = match (self.rest_scalp_frames[r], self.scalp_frame(r, guides)) {
             (Some(rest), Some(now)) => Turn::Frames(rest, now),
             _ => Turn::Frames(IDENTITY, IDENTITY),
         };
@@ -539,7 +534,7 @@ impl RenderHair {
             let g = self.closest[r][k] as usize;
             (
                 g,
-                MinimalRotation::new(directions[g], direction),
+                MinimalRotation::new(guides.directions[g], direction),
                 self.weights[r][k],
             )
         });
@@ -552,13 +547,13 @@ impl RenderHair {
             };
             let mut local = [0.0; 3];
             for &(g, rotation, w) in &frames {
-                let s = strand(g);
+                let s = guides.strand(g);
                 let from_root = sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3]));
                 local = add(local, scale(rotation.apply(from_root), w));
             }
             if self.clump > 0.0 {
                 let (g, rotation, _) = frames[0];
-                let s = strand(g);
+                let s = guides.strand(g);
                 let own = rotation.apply(sub(sample(s, u), s.first().copied().unwrap_or([0.0; 3])));
                 local = add(local, scale(sub(own, local), self.clump * u));
             }
