@@ -747,6 +747,7 @@ impl EdgeGrid {
             .zip(scanned.par_iter_mut())
             .for_each(|((((entries, probes), pairs), overflow), scanned)| {
                 pairs.clear();
+                let mut batch = Batch::new();
                 // The strand from the entry's probe, read in order (the
                 // owner table, indexed by vertex, is read at random).
                 for (e, probe) in entries
@@ -754,12 +755,16 @@ impl EdgeGrid {
                     .zip(probes)
                     .filter(|(e, _)| e.key & (HOME | EDGE) == HOME | EDGE)
                 {
-                    if pairs.len() >= max_pairs {
-                        *overflow = true;
-                        break;
+                    if batch.is_full() {
+                        if !lookup.search(&mut batch, max_pairs, pairs, scanned) {
+                            *overflow = true;
+                            return;
+                        }
                     }
-                    let edge = e.vertex as usize;
-                    lookup.pushes_of(edge, probe.strand, e.position, e.next, pairs, scanned);
+                    lookup.walk(&mut batch, e.vertex, probe.strand, e.position, e.next);
+                }
+                if !lookup.search(&mut batch, max_pairs, pairs, scanned) {
+                    *overflow = true;
                 }
             });
         let total = scanned.iter().sum();
@@ -909,51 +914,232 @@ impl Lookup<'_> {
         out: &mut Vec<Pair>,
         scanned: &mut u64,
     ) {
-        let reach = self.reach;
         let first = out.len();
-        let near = NearLine::new(a, b, reach);
+        let near = NearLine::new(a, b, self.reach);
         let walked = walk_cells(a, b, self.inv_cell, |key| {
             let bucket = bucket_of(unpack(key), self.bits);
-            let (start, end) = (
-                self.starts[bucket] as usize,
-                self.starts[bucket + 1] as usize,
-            );
-            *scanned += (end - start) as u64;
-            for (i, e) in self.probes[start..end].iter().enumerate() {
-                if e.key != key || e.strand == strand || !near.may_reach(e.position) {
-                    continue;
-                }
-                if let Some(push) = edge_push(e.position, a, b, reach) {
-                    out.push((self.entries[start + i].vertex, edge as u32, push));
-                }
-            }
+            let cell = (self.starts[bucket], self.starts[bucket + 1]);
+            self.scan_cell(key, cell, edge as u32, strand, &near, b, out, scanned);
         });
         if walked {
-            // A vertex met in several cells pushes the same each
-            // time: once.
-            if out.len() - first > 1 {
-                out[first..].sort_unstable_by_key(|&(v, _, _)| v);
-                let mut kept = first + 1;
-                for i in first + 1..out.len() {
-                    if out[i].0 != out[kept - 1].0 {
-                        out[kept] = out[i];
-                        kept += 1;
-                    }
-                }
-                out.truncate(kept);
-            }
+            keep_once(out, first);
         } else {
-            // Too long to walk: every vertex of another active strand.
-            *scanned += self.positions.len() as u64;
-            for (v, (&p, &owner)) in self.positions.iter().zip(self.owner).enumerate() {
-                if owner == u32::MAX || owner == strand {
-                    continue;
-                }
-                if let Some(push) = edge_push(p, a, b, reach) {
-                    out.push((v as u32, edge as u32, push));
-                }
+            self.every_vertex(edge as u32, strand, a, b, out, scanned);
+        }
+    }
+
+    /// The pushes of edge `edge` (of `strand`, `near` its line, ending at
+    /// `b`) on the vertices of the entries `cell` (a bucket's range) in
+    /// cell `key`, in entry order.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn scan_cell(
+        &self,
+        key: u32,
+        cell: (u32, u32),
+        edge: u32,
+        strand: u32,
+        near: &NearLine,
+        b: V3,
+        out: &mut Vec<Pair>,
+        scanned: &mut u64,
+    ) {
+        let (start, end) = (cell.0 as usize, cell.1 as usize);
+        *scanned += (end - start) as u64;
+        for (i, e) in self.probes[start..end].iter().enumerate() {
+            if e.key != key || e.strand == strand || !near.may_reach(e.position) {
+                continue;
+            }
+            if let Some(push) = edge_push(e.position, near.a, b, self.reach) {
+                out.push((self.entries[start + i].vertex, edge, push));
             }
         }
+    }
+
+    /// An edge too long to walk: its pushes on every vertex of another
+    /// active strand.
+    fn every_vertex(
+        &self,
+        edge: u32,
+        strand: u32,
+        a: V3,
+        b: V3,
+        out: &mut Vec<Pair>,
+        scanned: &mut u64,
+    ) {
+        *scanned += self.positions.len() as u64;
+        for (v, (&p, &owner)) in self.positions.iter().zip(self.owner).enumerate() {
+            if owner == u32::MAX || owner == strand {
+                continue;
+            }
+            if let Some(push) = edge_push(p, a, b, self.reach) {
+                out.push((v as u32, edge, push));
+            }
+        }
+    }
+
+    /// Adds an edge (its first vertex `edge`, of `strand`, from `a` to
+    /// `b`) to `batch` with the cells it walks, and asks the cache for
+    /// their buckets' starts.
+    #[inline]
+    fn walk(&self, batch: &mut Batch, edge: u32, strand: u32, a: V3, b: V3) {
+        let first = batch.visit_count;
+        let walked = walk_cells(a, b, self.inv_cell, |key| {
+            let bucket = bucket_of(unpack(key), self.bits);
+            prefetch(&self.starts[bucket..]);
+            batch.visits[batch.visit_count] = Visit {
+                key,
+                bucket: bucket as u32,
+                cell: (0, 0),
+            };
+            batch.visit_count += 1;
+        });
+        batch.edges[batch.edge_count] = BatchEdge {
+            edge,
+            strand,
+            a,
+            b,
+            visits: (first as u16, batch.visit_count as u16),
+            walked,
+        };
+        batch.edge_count += 1;
+    }
+
+    /// The pushes of the edges of `batch` appended to `out` in order,
+    /// as [`Self::pushes_of`] finds them edge by edge; the batch is left
+    /// empty. Over several steps, so that each step's reads were asked
+    /// of the cache by the step before: the buckets' starts (asked by
+    /// [`Self::walk`]), then each bucket's first entries, then the scans.
+    /// False when the pushes reached `max_pairs` (the rest not searched).
+    fn search(
+        &self,
+        batch: &mut Batch,
+        max_pairs: usize,
+        out: &mut Vec<Pair>,
+        scanned: &mut u64,
+    ) -> bool {
+        for visit in &mut batch.visits[..batch.visit_count] {
+            let bucket = visit.bucket as usize;
+            visit.cell = (self.starts[bucket], self.starts[bucket + 1]);
+            prefetch(&self.probes[visit.cell.0 as usize..]);
+        }
+        let mut complete = true;
+        for edge in &batch.edges[..batch.edge_count] {
+            if out.len() >= max_pairs {
+                complete = false;
+                break;
+            }
+            let first = out.len();
+            if edge.walked {
+                let near = NearLine::new(edge.a, edge.b, self.reach);
+                let (from, to) = (usize::from(edge.visits.0), usize::from(edge.visits.1));
+                for visit in &batch.visits[from..to] {
+                    let cell = visit.cell;
+                    self.scan_cell(
+                        visit.key,
+                        cell,
+                        edge.edge,
+                        edge.strand,
+                        &near,
+                        edge.b,
+                        out,
+                        scanned,
+                    );
+                }
+                keep_once(out, first);
+            } else {
+                self.every_vertex(edge.edge, edge.strand, edge.a, edge.b, out, scanned);
+            }
+        }
+        batch.edge_count = 0;
+        batch.visit_count = 0;
+        complete
+    }
+}
+
+/// Drops the repeats of `out[first..]` (one edge's pushes): a vertex met
+/// in several cells pushes the same each time, and counts once.
+fn keep_once(out: &mut Vec<Pair>, first: usize) {
+    if out.len() - first > 1 {
+        out[first..].sort_unstable_by_key(|&(v, _, _)| v);
+        let mut kept = first + 1;
+        for i in first + 1..out.len() {
+            if out[i].0 != out[kept - 1].0 {
+                out[kept] = out[i];
+                kept += 1;
+            }
+        }
+        out.truncate(kept);
+    }
+}
+
+/// Asks the cache for the line holding `items[0]` (nothing when empty).
+/// Only a hint: no value read or computed changes.
+#[inline(always)]
+fn prefetch<T>(items: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(item) = items.first() {
+        // SAFETY: a prefetch of a valid reference's address (SSE, part of
+        // x86-64) reads nothing the program sees.
+        unsafe {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(item).cast());
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = items;
+}
+
+/// Cells a batch of edges walks before its search (once past this, the
+/// batch is searched: each edge walks at most [`MAX_CELLS_PER_EDGE`]).
+const BATCH_CELLS: usize = 64;
+/// Edges a batch holds at most (an edge walks one cell at least).
+const BATCH_EDGES: usize = BATCH_CELLS;
+
+/// A cell an edge of a batch walks, and its bucket's entries.
+#[derive(Clone, Copy, Default)]
+struct Visit {
+    key: u32,
+    bucket: u32,
+    /// The bucket's range of entries, once read.
+    cell: (u32, u32),
+}
+
+/// An edge of a batch: its first vertex, strand and ends, and its visits.
+#[derive(Clone, Copy, Default)]
+struct BatchEdge {
+    edge: u32,
+    strand: u32,
+    a: V3,
+    b: V3,
+    visits: (u16, u16),
+    /// False when it crossed too many cells (it tests every vertex).
+    walked: bool,
+}
+
+/// Edges searched together, so that their memory reads overlap (each
+/// edge alone waits on one cell's read after another). On the stack:
+/// no allocation.
+struct Batch {
+    visits: [Visit; BATCH_CELLS + MAX_CELLS_PER_EDGE],
+    visit_count: usize,
+    edges: [BatchEdge; BATCH_EDGES],
+    edge_count: usize,
+}
+
+impl Batch {
+    fn new() -> Self {
+        Batch {
+            visits: [Visit::default(); BATCH_CELLS + MAX_CELLS_PER_EDGE],
+            visit_count: 0,
+            edges: [BatchEdge::default(); BATCH_EDGES],
+            edge_count: 0,
+        }
+    }
+
+    /// True when the next edge might not fit.
+    fn is_full(&self) -> bool {
+        self.visit_count >= BATCH_CELLS || self.edge_count >= BATCH_EDGES
     }
 }
 
