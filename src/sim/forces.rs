@@ -5,6 +5,7 @@
 //! strands are advanced in parallel, so the result does not depend on the
 //! thread count.
 
+use super::instructions::prefetch;
 use super::math::{cross, dot, is_finite3, length, scale, sub, V3};
 use super::Blower;
 
@@ -1007,7 +1008,9 @@ impl Lookup<'_> {
         let first = batch.visit_count;
         let walked = walk_cells(a, b, self.inv_cell, |key| {
             let bucket = bucket_of(unpack(key), self.bits);
-            prefetch(&self.starts[bucket..]);
+            if let Some(start) = self.starts.get(bucket) {
+                prefetch(start);
+            }
             batch.visits[batch.visit_count] = Visit {
                 key,
                 bucket: bucket as u32,
@@ -1028,10 +1031,10 @@ impl Lookup<'_> {
 
     /// The pushes of the edges of `batch` appended to `out` in order,
     /// as [`Self::pushes_of`] finds them edge by edge; the batch is left
-    /// empty. Over several steps, so that each step's reads were asked
-    /// of the cache by the step before: the buckets' starts (asked by
-    /// [`Self::walk`]), then each bucket's first entries, then the scans.
-    /// False when the pushes reached `max_pairs` (the rest not searched).
+    /// empty. In passes, each reading what the pass before asked of the
+    /// cache: the buckets' starts (asked for by [`Self::walk`]), which ask
+    /// for each bucket's first entries, then the scans. False when the
+    /// pushes reached `max_pairs` (the rest not searched).
     fn search(
         &self,
         batch: &mut Batch,
@@ -1042,7 +1045,9 @@ impl Lookup<'_> {
         for visit in &mut batch.visits[..batch.visit_count] {
             let bucket = visit.bucket as usize;
             visit.cell = (self.starts[bucket], self.starts[bucket + 1]);
-            prefetch(&self.probes[visit.cell.0 as usize..]);
+            if let Some(probe) = self.probes.get(visit.cell.0 as usize) {
+                prefetch(probe);
+            }
         }
         let mut complete = true;
         for edge in &batch.edges[..batch.edge_count] {
@@ -1092,23 +1097,6 @@ fn keep_once(out: &mut Vec<Pair>, first: usize) {
         }
         out.truncate(kept);
     }
-}
-
-/// Asks the cache for the line holding `items[0]` (nothing when empty).
-/// Only a hint: no value read or computed changes.
-#[inline(always)]
-fn prefetch<T>(items: &[T]) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(item) = items.first() {
-        // SAFETY: a prefetch of a valid reference's address (SSE, part of
-        // x86-64) reads nothing the program sees.
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(item).cast());
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = items;
 }
 
 /// Cells a batch of edges walks before its search (once past this, the

@@ -21,7 +21,7 @@
 //! order are fixed; the changes are only read. Buffers are kept from step
 //! to step (no allocation once warm, unless the hair's box grows).
 
-use super::instructions::{in_widest, Instructions};
+use super::instructions::{in_widest, prefetch, Instructions};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::eight_to_lanes;
 use super::math::{is_finite3, V3};
@@ -222,26 +222,15 @@ impl Placement {
 
     /// Asks the cache for the eight nodes of base node `first` (four rows
     /// of two along z). Where the hair goes next is known here, not to
-    /// the hardware, and the grid is megabytes. Only a hint: no value
-    /// read or computed changes.
+    /// the hardware, and the grid is megabytes.
     #[inline(always)]
     fn prefetch(&self, nodes: &[Node], first: usize) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            let (rows, row) = (self.dims[1], self.dims[2]);
-            for k in [0, row, rows * row, (rows + 1) * row] {
-                if let Some(node) = nodes.get(first + k) {
-                    // SAFETY: a prefetch of a valid reference's address
-                    // (SSE, part of x86-64) reads nothing the program sees.
-                    unsafe {
-                        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                        _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(node).cast());
-                    }
-                }
+        let (rows, row) = (self.dims[1], self.dims[2]);
+        for k in [0, row, rows * row, (rows + 1) * row] {
+            if let Some(node) = nodes.get(first + k) {
+                prefetch(node);
             }
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (nodes, first);
     }
 
     /// The nodes (x, y) steps from base node `first` (its index): the
