@@ -668,14 +668,15 @@ impl EdgeGrid {
                     };
                     let lo = cell_of([p[0] - reach, p[1] - reach, p[2] - reach], inv_cell);
                     let hi = cell_of([p[0] + reach, p[1] + reach, p[2] + reach], inv_cell);
+                    let entry = |key| Entry {
+                        position: p,
+                        next,
+                        vertex: v as u32,
+                        key,
+                    };
                     if hi == lo {
                         // Most vertices: one cell.
-                        out.push(Entry {
-                            position: p,
-                            next,
-                            vertex: v as u32,
-                            key: pack(lo) | HOME | edge,
-                        });
+                        out.push(entry(pack(lo) | HOME | edge));
                         continue;
                     }
                     // More than 2 cells per axis only at far-off
@@ -689,12 +690,7 @@ impl EdgeGrid {
                         for y in lo[1]..=hi[1] {
                             for z in lo[2]..=hi[2] {
                                 let home = if [x, y, z] == lo { HOME | edge } else { 0 };
-                                out.push(Entry {
-                                    position: p,
-                                    next,
-                                    vertex: v as u32,
-                                    key: pack([x, y, z]) | home,
-                                });
+                                out.push(entry(pack([x, y, z]) | home));
                             }
                         }
                     }
@@ -810,9 +806,10 @@ impl EdgeGrid {
         if self.overflow.iter().any(|&o| o) {
             let lookup = self.lookup(positions, reach);
             let mut scanned = 0;
+            let mut batch = Batch::new();
             for edge in 0..positions.len() {
                 all.clear();
-                lookup.edge_pushes(edge, &mut all, &mut scanned);
+                lookup.edge_pushes(edge, &mut batch, &mut all, &mut scanned);
                 add_pushes(&mut sums, &all);
             }
         } else {
@@ -914,39 +911,18 @@ struct Lookup<'a> {
 
 impl Lookup<'_> {
     /// Appends to `out` the [`edge_push`] of the edge starting at vertex
-    /// `edge` on every vertex of another strand within `reach`, each once; `scanned` counts the entries looked at.
-    fn edge_pushes(&self, edge: usize, out: &mut Vec<Pair>, scanned: &mut u64) {
+    /// `edge` on every vertex of another strand within `reach`, each once
+    /// (`batch` empty, and left empty); `scanned` counts the entries
+    /// looked at.
+    fn edge_pushes(&self, edge: usize, batch: &mut Batch, out: &mut Vec<Pair>, scanned: &mut u64) {
         if EdgeGrid::edge_strand(self.owner, edge).is_none() {
             return;
         }
         let (a, b) = (self.positions[edge], self.positions[edge + 1]);
         if is_finite3(a) && is_finite3(b) {
-            self.pushes_of(edge, self.owner[edge], a, b, out, scanned);
-        }
-    }
-
-    /// [`Self::edge_pushes`] of a finite edge of active strand `strand`,
-    /// from `a` to `b`.
-    fn pushes_of(
-        &self,
-        edge: usize,
-        strand: u32,
-        a: V3,
-        b: V3,
-        out: &mut Vec<Pair>,
-        scanned: &mut u64,
-    ) {
-        let first = out.len();
-        let near = NearLine::new(a, b, self.reach);
-        let walked = walk_cells(a, b, self.inv_cell, |key| {
-            let bucket = bucket_of(unpack(key), self.bits);
-            let cell = (self.starts[bucket], self.starts[bucket + 1]);
-            self.scan_cell(key, cell, edge as u32, strand, &near, b, out, scanned);
-        });
-        if walked {
-            keep_once(out, first);
-        } else {
-            self.every_vertex(edge as u32, strand, a, b, out, scanned);
+            // A batch of one edge: no limit on its pushes, so it completes.
+            self.walk(batch, edge as u32, self.owner[edge], a, b);
+            self.search(batch, usize::MAX, out, scanned);
         }
     }
 
@@ -1030,7 +1006,7 @@ impl Lookup<'_> {
     }
 
     /// The pushes of the edges of `batch` appended to `out` in order,
-    /// as [`Self::pushes_of`] finds them edge by edge; the batch is left
+    /// each edge's as [`Self::edge_pushes`] describes; the batch is left
     /// empty. In passes, each reading what the pass before asked of the
     /// cache: the buckets' starts (asked for by [`Self::walk`]), which ask
     /// for each bucket's first entries, then the scans. False when the
