@@ -228,6 +228,12 @@ fn roots_and_directions(counts: &[u32], points: &[V3]) -> (Vec<usize>, Vec<V3>) 
     (offsets, directions)
 }
 
+/// Every guide's root, as [`Guides::root`] reads it.
+fn guide_roots(guides: &Groom) -> Vec<V3> {
+    let pose = Guides::new(&guides.strand_vertex_counts, &guides.points);
+    (0..guides.strand_count()).map(|g| pose.root(g)).collect()
+}
+
 /// Point at fraction `u` of a strand (by vertex index).
 fn sample(strand: &[V3], u: f32) -> V3 {
     match strand.len() {
@@ -296,11 +302,7 @@ impl RenderHair {
         counts: Vec<u32>,
         options: InterpolationOptions,
     ) -> RenderHair {
-        let (offsets, _) = roots_and_directions(&guides.strand_vertex_counts, &guides.points);
-        let guide_roots: Vec<V3> = offsets[..guides.strand_count()]
-            .iter()
-            .map(|&o| guides.points.get(o).copied().unwrap_or([0.0; 3]))
-            .collect();
+        let guide_roots = guide_roots(guides);
         let (closest, weights): (Vec<_>, Vec<_>) = roots
             .iter()
             .map(|&p| inverse_distance(&three_nearest(&guide_roots, p, None)))
@@ -314,11 +316,7 @@ impl RenderHair {
     /// its weights. It gets the picked guide's vertex count.
     pub fn grow(guides: &Groom, count: usize, options: InterpolationOptions) -> RenderHair {
         let g = guides.strand_count();
-        let (offsets, _) = roots_and_directions(&guides.strand_vertex_counts, &guides.points);
-        let guide_roots: Vec<V3> = offsets[..g]
-            .iter()
-            .map(|&o| guides.points.get(o).copied().unwrap_or([0.0; 3]))
-            .collect();
+        let guide_roots = guide_roots(guides);
         let neighbours: Vec<Vec<(usize, f32)>> = (0..g)
             .map(|i| three_nearest(&guide_roots, guide_roots[i], Some(i)))
             .collect();
