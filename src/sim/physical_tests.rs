@@ -443,3 +443,104 @@ fn sag_free_rest_is_the_natural_shape_the_bonds_hold() {
     assert!(lifted > 3e-3, "the natural shape must curl up: {lifted}");
     assert!(drift < 1e-4, "{drift}");
 }
+
+/// A helix of arc length `length` hanging down (-Y) from the origin:
+/// radius `radius`, pitch `pitch` (rise per turn), `edges` equal edges.
+fn hanging_helix(length: f64, radius: f64, pitch: f64, edges: usize) -> Vec<V3> {
+    // Arc length per radian about the axis.
+    let per_radian = (radius * radius + (pitch / std::f64::consts::TAU).powi(2)).sqrt();
+    (0..=edges)
+        .map(|i| {
+            let phi = length * i as f64 / edges as f64 / per_radian;
+            [
+                (radius * phi.cos() - radius) as f32,
+                (-pitch * phi / std::f64::consts::TAU) as f32,
+                (radius * phi.sin()) as f32,
+            ]
+        })
+        .collect()
+}
+
+fn largest_distance(a: &[V3], b: &[V3]) -> f32 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| math::length(math::sub(*p, *q)))
+        .fold(0.0f32, f32::max)
+}
+
+/// Issue 40: the rest shape is placed from the root's rest frame (the
+/// scalp clamp), not from the first edge's current frame, which gravity
+/// turns at the clamp: a 20 cm helix hung 8 s under gravity without the
+/// sag-free start keeps its groomed rest shape, and the rest export is the
+/// groom. Before the fix it came out turned about the root by 3.6 degrees
+/// at 32 edges (2 mm at the vertices).
+#[test]
+fn rest_pose_of_a_helix_hung_under_gravity_is_the_groom() {
+    for edges in [32usize, 64, 128] {
+        for dt in [1.0 / 360.0f32, 1.0 / 1000.0] {
+            let points = hanging_helix(0.20, 0.01, 0.01, edges);
+            let mut groom = Groom::from_strands([points.clone()]);
+            groom.units = groom::Units::METERS;
+            let mut set = StrandSet::from_groom(&groom, &real_hair()).unwrap();
+            settle(&mut set, parameters(dt, 2.0), 8.0);
+            // The load really turned the first edge (else this test would
+            // not tell the two frames apart).
+            let sagged = largest_distance(set.positions(), &points);
+            assert!(sagged > 5e-3, "{edges} edges, dt {dt}: sagged {sagged}");
+            let off = largest_distance(&set.rest_pose(), &points);
+            eprintln!("helix {edges} edges, dt {dt}: sag {sagged:.4} m, rest off {off:.2e} m");
+            assert!(
+                off < 1e-6,
+                "{edges} edges, dt {dt}: rest pose off by {off} m"
+            );
+        }
+    }
+}
+
+/// The sag-free start's rest shape is the balanced one, placed from the
+/// same clamp: it is the same before and after the strand settles (before
+/// the fix, the first edge's frame was the groomed one at the start).
+#[test]
+fn sag_free_rest_pose_does_not_move_as_the_strand_settles() {
+    let points = hanging_helix(0.10, 0.01, 0.01, 32);
+    let mut groom = Groom::from_strands([points]);
+    groom.units = groom::Units::METERS;
+    let mut set = StrandSet::from_groom(&groom, &real_hair()).unwrap();
+    let report = set.make_sag_free(parameters(1.0 / 360.0, 2.0).gravity);
+    assert_eq!(report.strands, 1, "{report:?}");
+    let before = set.rest_pose();
+    settle(&mut set, parameters(1.0 / 360.0, 2.0), 2.0);
+    let off = largest_distance(&set.rest_pose(), &before);
+    assert!(off < 1e-6, "sag-free rest pose moved {off} m");
+    // And it is not the groom: the balanced shape differs from it.
+    let balanced = largest_distance(&before, groom.points.as_slice());
+    assert!(
+        balanced > 1e-4,
+        "the sag-free rest shape is the groom ({balanced} m)"
+    );
+}
+
+/// Roots on a moving scalp: the rest shape moves with the roots'
+/// transform, rigidly (a turned and lifted head gives the turned groom).
+#[test]
+fn rest_pose_follows_the_root_transform() {
+    use parry3d::math::{Pose, Rot3, Vector};
+    let points = hanging_helix(0.10, 0.01, 0.01, 32);
+    let mut groom = Groom::from_strands([points.clone()]);
+    groom.units = groom::Units::METERS;
+    let mut set = StrandSet::from_groom(&groom, &real_hair()).unwrap();
+    let rotation = Rot3::from_scaled_axis(Vector::new(0.3, 0.2, -0.1));
+    let pose = Pose::from_parts(Vector::new(0.0, 0.05, 0.02), rotation);
+    set.set_root_transform(&pose);
+    settle(&mut set, parameters(1.0 / 360.0, 20.0), 3.0);
+    let expected: Vec<V3> = points
+        .iter()
+        .map(|p| {
+            let q = pose.rotation * Vector::new(p[0], p[1], p[2]) + pose.translation;
+            [q.x, q.y, q.z]
+        })
+        .collect();
+    let off = largest_distance(&set.rest_pose(), &expected);
+    assert!(off < 1e-5, "rest pose off the moved groom by {off} m");
+}

@@ -33,10 +33,17 @@ impl StrandSet {
     }
 
     /// The rest shape of every strand (per vertex, in the strands' order):
-    /// roots and root frames where they are now, each next frame the
-    /// previous one turned by the rest Darboux vector, each vertex one rest
-    /// length along its edge's tangent. Strands that are not simulated keep
-    /// their current points.
+    /// each root where it is now, its first edge in the root's *rest* frame
+    /// (the scalp clamp's frame, moved with the roots' transform, turned by
+    /// the clamp's rest Darboux vector: the groomed root edge, or what the
+    /// sag-free start solved), each next frame the previous one turned by
+    /// the rest Darboux vector, each vertex one rest length along its edge's
+    /// tangent. Strands that are not simulated keep their current points.
+    ///
+    /// Not the first edge's current frame: under a load (gravity, a press)
+    /// the physical model's clamp is a stiff joint, not a weld, so that
+    /// frame is turned by the load, and the whole rest shape with it
+    /// (3.6 degrees for a 20 cm helix hung under gravity).
     pub fn rest_pose(&self) -> Vec<[f32; 3]> {
         let rest = self.rest_darboux();
         let mut out = self.positions.clone();
@@ -45,7 +52,9 @@ impl StrandSet {
                 continue;
             }
             let (first, end) = (self.offsets[strand], self.offsets[strand + 1]);
-            let mut frame = self.edges[first].rotation;
+            let root = &self.roots[strand];
+            let clamp = math::qmul(self.root_transform.rotation, root.frame);
+            let mut frame = math::qnormalize(math::qmul(clamp, math::from_imaginary(root.rest)));
             let mut p: V3 = self.positions[first];
             for e in first..end - 1 {
                 if e > first {
