@@ -19,6 +19,7 @@ mod hardening;
 mod inspect;
 mod install;
 mod preview;
+mod readme;
 mod refusals;
 mod roundtrip;
 mod samples;
