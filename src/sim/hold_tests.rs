@@ -196,3 +196,38 @@ fn with_a_hold_every_bangs_strand_stays_within_1_mm_for_3_s() {
     assert!(worst[0] > 0.01, "the Bangs roll over without a hold");
     assert!(worst[1] < 1e-3, "{}", worst[1]);
 }
+
+#[test]
+fn the_paper_model_is_held_as_the_physical_one() {
+    // Unit masses and Gauss-Seidel sweeps: the hold folds into them the
+    // same way (prediction and inverse mass), so the tip settles g / k
+    // below its groom there too.
+    let k = 4000.0;
+    let paper = Material {
+        model: Model::Paper,
+        ..hair(4.0e-5)
+    };
+    let mut set = horizontal(&paper);
+    let parameters = SolverParameters {
+        linear_damping: 20.0,
+        angular_damping: 20.0,
+        ..SolverParameters::default()
+    };
+    let mut solver = Solver::new(parameters).unwrap();
+    let environment = Environment {
+        hold: Some(Hold::uniform(k)),
+        ..Environment::default()
+    };
+    for _ in 0..(3.0 / parameters.dt).round() as usize {
+        solver
+            .step(&mut set, &ColliderSet::new(), &environment)
+            .unwrap();
+    }
+    let sag = tip_sag(&set);
+    eprintln!(
+        "paper model, hold {k} 1/s^2: tip {:.4} mm below its groom, g/k {:.4} mm",
+        sag * 1e3,
+        G / k * 1e3
+    );
+    assert!((sag * k / G - 1.0).abs() < 0.05, "{sag}");
+}
