@@ -57,8 +57,20 @@ fn a_hold_keeps_every_bangs_strand_within_1_mm_and_the_reports_say_so() {
     let dir = TestDir::new();
     // 1e5 1/s^2 is what the Bangs need (sim/hold_tests.rs).
     std::fs::write(dir.path("held.toml"), bangs_timeline("hold = 1e5")).unwrap();
-    dir.run_ok(&["bake", "held.toml", "-q", "--report", "r.json"]);
+    dir.run_ok(&[
+        "bake",
+        "held.toml",
+        "-q",
+        "--report",
+        "r.json",
+        "--threads",
+        "1",
+    ]);
     let held = drifts(&dir);
+    let one = std::fs::read(dir.path("final.glb")).unwrap();
+    dir.run_ok(&["bake", "held.toml", "-q", "--threads", "2"]);
+    let two = std::fs::read(dir.path("final.glb")).unwrap();
+    assert!(one == two, "the held bake differs between 1 and 2 threads");
     dir.run_ok(&["bake", "held.toml", "-q", "--report", "r.html"]);
     std::fs::write(dir.path("free.toml"), bangs_timeline("")).unwrap();
     dir.run_ok(&["bake", "free.toml", "-q", "--report", "free.json"]);
