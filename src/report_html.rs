@@ -274,8 +274,27 @@ pub fn bake_page(
         }
         None => body.push_str("<p>No sheet.</p>\n"),
     }
-    body.push_str("<h2>Stages</h2>\n<table><tr><th>#</th><th>name</th><th>kind</th><th>simulated (s)</th><th>steps</th><th>wall (s)</th><th>contained strands</th></tr>\n");
+    // The hold is shown only where a stage has one (it is off by default).
+    let held = report.stages.iter().any(|s| s.hold.is_some());
+    let _ = writeln!(
+        body,
+        "<h2>Stages</h2>\n<table><tr><th>#</th><th>name</th><th>kind</th><th>simulated (s)</th><th>steps</th><th>wall (s)</th><th>contained strands</th>{}</tr>",
+        if held {
+            "<th>hold (1/s<sup>2</sup>, root &rarr; tip)</th>"
+        } else {
+            ""
+        }
+    );
     for s in &report.stages {
+        let hold = match (held, &s.hold) {
+            (false, _) => String::new(),
+            (true, None) => "<td>off</td>".to_string(),
+            (true, Some(h)) => format!(
+                "<td class=\"num\">{} &rarr; {}</td>",
+                h.strength * h.ramp[0],
+                h.strength * h.ramp[1]
+            ),
+        };
         let contained = if s.contained_strands.is_empty() {
             "none".to_string()
         } else {
@@ -283,7 +302,7 @@ pub fn bake_page(
         };
         let _ = writeln!(
             body,
-            "<tr><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td>{}</td></tr>",
+            "<tr><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td>{}</td>{hold}</tr>",
             s.index,
             escape(&s.name),
             escape(&s.kind),

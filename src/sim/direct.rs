@@ -91,9 +91,13 @@ pub struct DirectInput<'a> {
     /// Predicted positions (`n`) and frames (`n - 1`).
     pub p: &'a [V3],
     pub q: &'a [Quat],
-    /// Per vertex, 1 where it is free, 0 where it is pinned or driven (the
-    /// solve weighs a free vertex by its mass).
+    /// Per vertex, 0 where it is pinned or driven, else the factor of its
+    /// inverse mass: 1 for a free vertex (the solve weighs it by its mass),
+    /// `1 / (1 + k dt^2)` for one the hold pulls (hold.rs).
     pub free: &'a [f32],
+    /// Per edge, the factor of its frame's inverse inertia: 1, or `1 / (1 +
+    /// k dt^2)` for a frame the hold pulls (hold.rs).
+    pub frame_free: &'a [f32],
     /// Per vertex, the unit normal of a contact the solve must hardly move
     /// the vertex along (zero: no contact), or empty when nothing touches.
     /// The contact is folded into the vertex's inverse mass, `w (I -
@@ -167,6 +171,8 @@ pub(super) fn edge_flexibility<T: Real>(
 #[derive(Debug, Clone, Copy, Default)]
 struct EdgeLane<T> {
     l: T,
+    /// The factor of the frame's inverse inertia (`DirectInput::frame_free`).
+    keep: T,
     /// Half the edge's mass (each end vertex gets it).
     half_mass: T,
     /// The frame's inverse inertia across and about the tangent.
@@ -371,8 +377,9 @@ impl<T: Real> Direct<T> {
                 o[1].set_lane(lane, joint.cuticle as f64);
                 o[2].set_lane(lane, free as f64);
             }
-            for (o, &l) in self.edges.iter_mut().zip(s.l) {
+            for ((o, &l), &keep) in self.edges.iter_mut().zip(s.l).zip(s.frame_free) {
                 o.l.set_lane(lane, l as f64);
+                o.keep.set_lane(lane, keep as f64);
             }
         }
         let vertices = &self.vertices;
@@ -395,6 +402,7 @@ impl<T: Real> Direct<T> {
         };
         for k in 0..m {
             let l = self.edges[k].l;
+            let keep = self.edges[k].keep;
             let (r0, r1) = (vertices[k][0], vertices[k + 1][0]);
             let r = half * (r0 + r1);
             let area = pi * r * r;
@@ -406,11 +414,14 @@ impl<T: Real> Direct<T> {
             let third = T::splat(3.0);
             self.edges[k] = EdgeLane {
                 l,
+                keep,
                 half_mass: half * segment,
                 // (`* 0.25`, `* 0.5`: the bits of `/ 4`, `/ 2`.)
+                // (`* keep`: the same bits without a hold, `keep` = 1.)
                 wq: (one / (segment * (arm * arm / T::splat(12.0) + r * r * T::splat(0.25))))
-                    .to_f32_precision(),
-                w_twist: (one / (segment * r * r * half)).to_f32_precision(),
+                    .to_f32_precision()
+                    * keep,
+                w_twist: (one / (segment * r * r * half)).to_f32_precision() * keep,
                 shear: l / (shear * cuticle * area),
                 stretch: l / (youngs * cuticle * area),
                 bend_third: bend / third,
@@ -428,10 +439,11 @@ impl<T: Real> Direct<T> {
                 (Some(before), None) => edges[before].half_mass,
                 (None, None) => one,
             };
+            // (`* free`: the same bits for a free vertex, `free` = 1.)
             self.w.push(T::gt_select(
                 free,
                 zero,
-                (one / mass).to_f32_precision(),
+                (one / mass).to_f32_precision() * free,
                 free,
             ));
         }

@@ -28,6 +28,10 @@
 //!   (`StrandSet::make_sag_free`, sag_free.rs): the groom then stands still
 //!   under gravity (physical model), except strands a lone hair cannot
 //!   hold, which `make_sag_free_checked` names.
+//! - With a hold ([`Environment::hold`], hold.rs: off unless asked for)
+//!   every free vertex is pulled toward its groomed position, carried with
+//!   the scalp, by an implicit spring folded into its prediction and its
+//!   inverse mass in the solve.
 //! - The state's velocity is the real one, `(x_new - x_old) / dt`; the
 //!   Follow-The-Leader correction (paper model) is kept apart and applied
 //!   to the next prediction only.
@@ -56,6 +60,9 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
+mod hold;
+#[cfg(test)]
+mod hold_tests;
 mod instructions;
 mod lanes;
 mod math;
@@ -85,10 +92,14 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
 }
 
 pub use colliders::{Collider, ColliderSet};
+pub use hold::Hold;
 pub use instructions::Instructions;
 pub use parry3d;
 pub use parry3d::math::Pose;
-pub use quarantine::{contain_blowups, unsimulated_strands, Blowup, MAX_STRAIN};
+pub use quarantine::{
+    contain_blowups, contain_blowups_watching, unsimulated_strands, Blowup, StrainWatch,
+    MAX_STRAIN, WARN_STRAIN,
+};
 pub use sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
@@ -485,6 +496,8 @@ pub struct Environment<'a> {
     /// An extra acceleration per vertex (m/s^2, one per vertex of the
     /// strand set, in its order): the wind hook.
     pub extra_acceleration: Option<&'a [[f32; 3]]>,
+    /// The hold toward the groomed shape (hold.rs); `None`: off.
+    pub hold: Option<Hold>,
 }
 
 /// Why the solver cannot start or go on.

@@ -230,7 +230,7 @@ fn strand_drifts(set: &mut StrandSet, gravity: [f32; 3], seconds: f32) -> Vec<f6
 }
 
 /// hairutil's Bangs (tests/data): millimetres, hanging along -X.
-fn bangs() -> (Groom, [f32; 3]) {
+pub(super) fn bangs() -> (Groom, [f32; 3]) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/hairutil_Bangs_100.hair"

@@ -96,7 +96,7 @@ impl SagFreeReport {
             .collect();
         (!self.unstable.is_empty()).then(|| {
             format!(
-                "sag-free: {} of {} strands cannot stand as groomed as lone hairs (strands {}{}): standing alone they move {} mm or more within {} s under gravity; thicker or stiffer hair ([material] radius, youngs_modulus), a shorter reach, or neighbours that hold them keep them",
+                "sag-free: {} of {} strands cannot stand as groomed as lone hairs (strands {}{}): standing alone they move {} mm or more within {} s under gravity; thicker or stiffer hair ([material] radius, youngs_modulus), a shorter reach, neighbours that hold them, or a [material] hold keep them",
                 self.unstable.len(),
                 self.strands,
                 first.join(", "),

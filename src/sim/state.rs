@@ -105,6 +105,13 @@ pub struct StrandSet {
     pub(crate) radii: Vec<f32>,
     /// The iteration count `stiffness_prime` was computed for (0: none).
     pub(crate) prime_iterations: u32,
+    /// The hold's targets (hold.rs): each vertex where the strands were
+    /// made, in scalp space (the root transform carries them), and its
+    /// fraction of its strand's length from the root there.
+    pub(crate) groomed: Vec<V3>,
+    pub(crate) groomed_fraction: Vec<f32>,
+    /// The edges' frames there (scalp space), per edge slot.
+    pub(crate) groomed_frames: Vec<Quat>,
 }
 
 /// Names of the state attributes (see `to_groom_attributes`).
@@ -241,6 +248,9 @@ impl StrandSet {
             wetness: vec![0.0; vertex_count],
             radii: fibre_radii(groom, material),
             prime_iterations: 0,
+            groomed: groom.points.clone(),
+            groomed_fraction: Vec::new(),
+            groomed_frames: Vec::new(),
         };
         for strand in 0..strand_count {
             let range = set.offsets[strand]..set.offsets[strand + 1];
@@ -257,6 +267,8 @@ impl StrandSet {
             }
             set.init_strand(strand);
         }
+        set.groomed_fraction = super::hold::arc_fractions(&set.groomed, &set.offsets);
+        set.groomed_frames = set.edges.iter().map(|e| e.rotation).collect();
         Ok(set)
     }
 
@@ -475,6 +487,26 @@ impl StrandSet {
         {
             self.root_transform = rigid;
         }
+    }
+
+    /// The hold's targets (see [`super::Hold`]): every vertex where the
+    /// strands were made, in scalp space.
+    pub fn groomed_positions(&self) -> &[[f32; 3]] {
+        &self.groomed
+    }
+
+    /// Takes the hold's targets of `other` (the same strands: same vertex
+    /// counts), e.g. after rebuilding the state from positions that a
+    /// stage moved directly. Returns false, changing nothing, when the
+    /// strands differ.
+    pub fn keep_groomed_of(&mut self, other: &StrandSet) -> bool {
+        if other.offsets != self.offsets {
+            return false;
+        }
+        self.groomed.clone_from(&other.groomed);
+        self.groomed_fraction.clone_from(&other.groomed_fraction);
+        self.groomed_frames.clone_from(&other.groomed_frames);
+        true
     }
 
     /// Strands that are simulated (at least one edge, none degenerate).
@@ -722,6 +754,8 @@ impl StrandSet {
                 set.joints[end - 1] = fresh.joints[end - 1];
             }
         }
+        // The hold's frames: the ones the bake continues from.
+        set.groomed_frames = set.edges.iter().map(|e| e.rotation).collect();
         // Restored state must be usable: no non-finite value, no degenerate edge.
         for strand in 0..s {
             let range = set.offsets[strand]..set.offsets[strand + 1];

@@ -1,6 +1,7 @@
 //! One step of 000 Fig. 1 (METHOD D), fused per strand (or per group of
 //! strands in SIMD lanes), in named phases:
-//! 1. `predict` (forces): external forces, predicted positions and frames;
+//! 1. `predict` (forces): external forces, predicted positions and frames
+//!    (with the hold folded in, hold.rs);
 //! 2. `rest_shape` (bonds): bond-rate changes, rest shape from the bonds (15);
 //! 3. the constraint solve (constraints): `n` iterations of stretch/shear,
 //!    bend/twist and collisions (the physical model's Newton iterations),
@@ -25,6 +26,7 @@ use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMa
 #[cfg(target_arch = "x86_64")]
 use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
+use super::hold::{fold, fold_frame};
 use super::instructions::{in_widest, Instructions};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
@@ -32,7 +34,7 @@ use super::quarantine::all_finite;
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
 use super::volume::VolumeGrid;
 use super::{
-    Blower, ColliderSet, Environment, Gravity, Inextensibility, Model, PhaseTimes, SimError,
+    Blower, ColliderSet, Environment, Gravity, Hold, Inextensibility, Model, PhaseTimes, SimError,
     SolverParameters, StepReport, StrandSet,
 };
 use rayon::prelude::*;
@@ -120,6 +122,10 @@ struct StrandMut<'a> {
     joints: &'a mut [JointState],
     controls: &'a [VertexControl],
     radii: &'a [f32],
+    /// The hold's targets (scalp space) and arc fractions.
+    groomed: &'a [V3],
+    groomed_fraction: &'a [f32],
+    groomed_frames: &'a [Quat],
 }
 
 /// What every strand's step reads.
@@ -145,6 +151,8 @@ struct Context<'a> {
     bonds_still: bool,
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
+    /// The hold toward the groomed shape (hold.rs), when on.
+    hold: Option<Hold>,
     hair_hair: Option<(f32, &'a EdgeGrid)>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
@@ -214,6 +222,9 @@ struct Work {
     /// coefficient (Coulomb friction after the solve).
     contact_velocities: Vec<V3>,
     contact_friction: Vec<f32>,
+    /// Per edge, the factor of its frame's inverse inertia (the hold's,
+    /// hold.rs; 1 without).
+    frame_keep: Vec<f32>,
     /// The predicted positions before any contact (the physical model's
     /// friction measures the normal push from them).
     predicted: Vec<V3>,
@@ -258,6 +269,7 @@ impl Work {
         ] {
             v.resize(n, 0.0);
         }
+        self.frame_keep.resize(n, 1.0);
         self.direct.reserve(n);
         self.stretch.resize(n, StretchCoefficients::default());
         self.bend.resize(n, [0.0; 2]);
@@ -353,6 +365,9 @@ impl Solver {
                     "the blower has a non-finite value".into(),
                 ));
             }
+        }
+        if let Some(problem) = environment.hold.as_ref().and_then(Hold::problem) {
+            return Err(SimError::Environment(format!("hold: {problem}")));
         }
         let gravity = match environment.gravity {
             Gravity::Default => parameters.gravity,
@@ -461,6 +476,7 @@ impl Solver {
                 && environment.blower.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
+            hold: environment.hold.filter(|h| h.strength > 0.0),
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
             volume: volumetric,
             colliders: &prepared,
@@ -579,6 +595,9 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Ve
         joints,
         controls,
         radii,
+        groomed,
+        groomed_fraction,
+        groomed_frames,
         ..
     } = strands;
     let mut positions = positions.as_mut_slice();
@@ -588,6 +607,9 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Ve
     let mut joints = joints.as_mut_slice();
     let mut controls = controls.as_slice();
     let mut radii = radii.as_slice();
+    let mut groomed = groomed.as_slice();
+    let mut groomed_fraction = groomed_fraction.as_slice();
+    let mut groomed_frames = groomed_frames.as_slice();
     views.reserve(roots.len());
     for (index, w) in offsets.windows(2).enumerate() {
         let n = w[1] - w[0];
@@ -599,6 +621,12 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Ve
         let (c, rest_c) = controls.split_at(n);
         let (r, rest_r) = radii.split_at(n);
         radii = rest_r;
+        let (g, rest_g) = groomed.split_at(n);
+        let (f, rest_f) = groomed_fraction.split_at(n);
+        groomed = rest_g;
+        groomed_fraction = rest_f;
+        let (gq, rest_gq) = groomed_frames.split_at(n);
+        groomed_frames = rest_gq;
         positions = rest_p;
         velocities = rest_v;
         corrections = rest_dv;
@@ -617,6 +645,9 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Ve
             joints: j,
             controls: c,
             radii: r,
+            groomed: g,
+            groomed_fraction: f,
+            groomed_frames: gq,
         });
     }
 }
@@ -636,6 +667,9 @@ impl StrandMut<'_> {
             joints: self.joints,
             controls: self.controls,
             radii: self.radii,
+            groomed: self.groomed,
+            groomed_fraction: self.groomed_fraction,
+            groomed_frames: self.groomed_frames,
         }
     }
 }
@@ -699,6 +733,13 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             v = math::add(v, volume.dv(s.index, i));
         }
         work.p[i] = math::add(x, math::scale(v, dt));
+        if let Some(hold) = &ctx.hold {
+            let k = hold.at(s.groomed_fraction[i]);
+            if k > 0.0 {
+                let target = ctx.root_transform.apply(s.groomed[i]);
+                (work.p[i], work.w[i]) = fold(work.p[i], target, k, dt);
+            }
+        }
     }
     work.root_frame = math::qmul(ctx.root_transform.rotation, s.root.frame);
     // The clamp's rest turn (zero unless the sag-free start set one).
@@ -730,6 +771,18 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             if ctx.physical.is_none() {
                 // (The physical model's inertias come from its constants.)
                 work.w_q[e] = ctx.quaternion_mass_scale / (edge.rest_length * edge.rest_length);
+            }
+            work.frame_keep[e] = 1.0;
+            if let Some(hold) = &ctx.hold {
+                let f = s.groomed_fraction;
+                let k = hold.at(0.5 * (f[e] + f[e + 1]));
+                if k > 0.0 {
+                    let target = math::qmul(ctx.root_transform.rotation, s.groomed_frames[e]);
+                    let keep;
+                    (work.q[e], keep) = fold_frame(work.q[e], target, k, dt);
+                    work.frame_keep[e] = keep;
+                    work.w_q[e] *= keep;
+                }
             }
         }
         if ctx.physical.is_none() {
@@ -1208,6 +1261,7 @@ fn direct_input<'a>(
         p: &work.p[..n],
         q: &work.q[..m],
         free: &work.w[..n],
+        frame_free: &work.frame_keep[..m],
         // Empty without colliders: the solve then skips reading zeros.
         contact_normals: if ctx.colliders.is_empty() {
             &[]

@@ -842,7 +842,7 @@ const WIDEST: Instructions = Instructions::Avx512;
 
 /// [`assert_groups_match_strands_alone`], in a `still` step (no bond
 /// drive, no blower: the rest shape's still path) with some bonds broken,
-/// or with a drive and a blower; the groups in at most `widest`
+/// or with a drive, a blower and a hold; the groups in at most `widest`
 /// instructions.
 fn assert_groups_match_strands_alone_in(
     material: &Material,
@@ -900,6 +900,11 @@ fn assert_groups_match_strands_alone_in(
                 hydrogen_rate: 0.003,
             }),
             bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
+            // The hold too (ramped: a different strength per vertex).
+            hold: Some(Hold {
+                strength: 3000.0,
+                ramp: [0.2, 1.0],
+            }),
             ..Environment::default()
         }
     };

@@ -752,6 +752,8 @@ struct StageRun<'p> {
     unrolled: bool,
     /// Positions before the step, for the watchdog to put a strand back.
     before: Vec<[f32; 3]>,
+    /// The strands the watchdog saw strained beyond `sim::WARN_STRAIN`.
+    strain: sim::StrainWatch,
 }
 
 impl<'a> BakeRun<'a> {
@@ -786,7 +788,10 @@ impl<'a> BakeRun<'a> {
             .stages
             .get_ref()
             .iter()
-            .map(StagePlan::new)
+            .map(|spec| StagePlan {
+                hold: super::hold::of_stage(&timeline.file, spec),
+                ..StagePlan::new(spec)
+            })
             .collect();
         let stage_steps = timeline.stage_steps();
         let total_steps: u64 = stage_steps.iter().sum();
@@ -1026,6 +1031,7 @@ impl<'a> BakeRun<'a> {
         let mut stage_report = StageReport {
             index: stage_index,
             kind: plan.kind.name().to_string(),
+            hold: plan.hold,
             name,
             simulated_seconds: steps as f64 * dt,
             steps,
@@ -1056,8 +1062,11 @@ impl<'a> BakeRun<'a> {
             overall.inc(1);
         }
         if stage.wind.is_some() {
-            self.strands =
+            let rebuilt =
                 with_frames_from_positions(&self.groom, &self.strands, &material_of(timeline))?;
+            let old = std::mem::replace(&mut self.strands, rebuilt);
+            // The hold's targets stay the groom's.
+            self.strands.keep_groomed_of(&old);
         }
         self.snapshot(format!("after {}", stage_report.name));
         let non_finite = stage_report.contained_strands.len() - stage_report.watchdog.len();
@@ -1066,6 +1075,9 @@ impl<'a> BakeRun<'a> {
                 "{non_finite} strand(s) turned non-finite and were frozen: {:?}",
                 &stage_report.contained_strands[..]
             ));
+        }
+        if let Some(warning) = stage.strain.warning(&stage_report.name) {
+            stage_report.warnings.push(warning);
         }
         if let Some(first) = stage_report.watchdog.first() {
             stage_report.warnings.push(format!(
@@ -1141,6 +1153,7 @@ impl<'a> BakeRun<'a> {
             wind,
             unrolled: false,
             before: Vec::new(),
+            strain: sim::StrainWatch::default(),
         })
     }
 
@@ -1156,7 +1169,8 @@ impl<'a> BakeRun<'a> {
         stage.before.clear();
         stage.before.extend_from_slice(self.strands.positions());
         let contained = self.step(stage, t_local, t_end)?;
-        let blowups = sim::contain_blowups(&mut self.strands, &stage.before);
+        let blowups =
+            sim::contain_blowups_watching(&mut self.strands, &stage.before, &mut stage.strain);
         Ok((contained, blowups))
     }
 

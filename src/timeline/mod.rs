@@ -3,6 +3,7 @@
 //! bake that runs them and writes the exports ([`bake`]).
 
 pub mod bake;
+pub mod hold;
 pub mod motion;
 pub mod outputs;
 pub mod render;
@@ -367,6 +368,7 @@ impl Timeline {
         for stage in stages {
             self.check_stage(stage, &names, dt)?;
         }
+        hold::check(self)?;
         // The work and the outputs' sizes: with the generator's vertex
         // count now, a source file's again once it is read (`check_budget`).
         let vertices = match &f.groom.generate {

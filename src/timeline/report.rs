@@ -11,6 +11,10 @@ pub struct StageReport {
     pub index: usize,
     pub kind: String,
     pub name: String,
+    /// The hold toward the groomed shape in this stage, when on: `strength`
+    /// (1/s^2) and `ramp` (its shares at the root and the tip).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hold: Option<crate::sim::Hold>,
     /// Simulated seconds (to the microsecond).
     #[serde(serialize_with = "micros")]
     pub simulated_seconds: f64,

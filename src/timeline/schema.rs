@@ -139,6 +139,12 @@ pub struct MaterialSpec {
     /// Cuticle peel rate: the fraction of cuticle lost per centimetre from the root.
     pub cuticle_peel_per_cm: Spanned<f32>,
     pub bonds: Spanned<BondInfluences>,
+    /// The hold toward the groomed shape, 1/s^2 (`crate::sim::Hold`): off
+    /// when absent or 0; a stage's `hold` replaces it.
+    pub hold: Option<Spanned<f32>>,
+    /// The hold's shares at the root and the tip, each in [0, 1] (default
+    /// `[1, 1]`); a stage's `hold_ramp` replaces it.
+    pub hold_ramp: Option<Spanned<[f32; 2]>>,
 }
 
 impl Default for MaterialSpec {
@@ -153,6 +159,8 @@ impl Default for MaterialSpec {
             radius: None,
             cuticle_peel_per_cm: Spanned::new(0..0, 0.0033),
             bonds: Spanned::new(0..0, BondInfluences::default()),
+            hold: None,
+            hold_ramp: None,
         }
     }
 }
@@ -506,6 +514,10 @@ pub struct StageSpec {
     pub wind: Option<Spanned<WindSpec>>,
     /// Replaces the solver's damping in this stage.
     pub damping: Option<DampingSpec>,
+    /// Replaces `[material] hold` in this stage (1/s^2; 0: off).
+    pub hold: Option<Spanned<f32>>,
+    /// Replaces `[material] hold_ramp` in this stage.
+    pub hold_ramp: Option<Spanned<[f32; 2]>>,
 }
 
 fn yes() -> bool {

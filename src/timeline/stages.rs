@@ -5,7 +5,7 @@
 
 use super::schema::{BondDriveSpec, StageKind, StageSpec, WindSpec};
 use super::BOND_NAMES;
-use crate::sim::{Blower, Environment, Gravity, StrandSet};
+use crate::sim::{Blower, Environment, Gravity, Hold, StrandSet};
 use crate::stochastic_wind::StochasticWind;
 use groom::math::double::{cross, length as norm, sub};
 
@@ -52,6 +52,8 @@ pub struct StagePlan {
     pub wind: Option<WindSpec>,
     /// Whether kinematic targets of an earlier stage are let go at the start.
     pub release_targets: bool,
+    /// The hold toward the groomed shape in this stage (`super::hold`).
+    pub hold: Option<Hold>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -174,6 +176,7 @@ impl StagePlan {
             perm,
             wind: spec.wind.as_ref().map(|w| w.get_ref().clone()),
             release_targets,
+            hold: None,
         }
     }
 
@@ -187,6 +190,7 @@ impl StagePlan {
                 Gravity::Off
             },
             blower: self.blower,
+            hold: self.hold,
             ..Environment::default()
         };
         for (kind, drives) in self.bonds.iter().enumerate() {

@@ -16,6 +16,7 @@ mod formats;
 mod golden;
 mod guides;
 mod hardening;
+mod hold;
 mod inspect;
 mod install;
 mod preview;
