@@ -626,6 +626,8 @@ struct CurveSet {
     /// The USD type each attribute was declared with (`color3f[]`, ...).
     declared_types: Vec<(String, String)>,
     notes: Vec<String>,
+    /// Primvars that could not be kept, with why (warnings).
+    losses: Vec<String>,
 }
 
 fn to_points(values: &[f64], matrix: &Matrix) -> Vec<[f32; 3]> {
@@ -633,6 +635,32 @@ fn to_points(values: &[f64], matrix: &Matrix) -> Vec<[f32; 3]> {
         .chunks_exact(3)
         .map(|p| transform_point(matrix, [p[0], p[1], p[2]]).map(|c| c as f32))
         .collect()
+}
+
+/// Refuses a prim whose `curveVertexCounts` change over time: a groom holds
+/// one topology (the whole file is refused, with where it changes, since a
+/// bake cannot skip part of the hair; `read_sequence` carries the change).
+fn check_one_topology(file: &Path, prim: &Prim) -> Result<(), ImportError> {
+    let Some(counts_attribute) = prim.attribute("curveVertexCounts") else {
+        return Ok(());
+    };
+    if let Some(first) = counts_attribute.static_value() {
+        let changed = counts_attribute
+            .samples
+            .iter()
+            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
+        if let Some((code, _)) = changed {
+            return Err(ImportError::malformed(
+                file,
+                counts_attribute.place.clone(),
+                format!(
+                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
+                     a bake needs one topology (inspect and convert carry the change)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, ImportError> {
@@ -647,22 +675,6 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             prim.path
         ))
     })?;
-    // Time-varying topology: a groom holds one (refused with where it changes).
-    if let Some(first) = counts_attribute.static_value() {
-        let changed = counts_attribute
-            .samples
-            .iter()
-            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
-        if let Some((code, _)) = changed {
-            return Err(at(
-                counts_attribute,
-                format!(
-                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
-                     a bake needs one topology (inspect and convert carry the change)"
-                ),
-            ));
-        }
-    }
     let counts_values = counts_attribute
         .static_value()
         .and_then(|v| v.numbers(1))
@@ -771,7 +783,16 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         attributes: Vec::new(),
         declared_types: Vec::new(),
         notes: Vec::new(),
+        losses: Vec::new(),
     };
+    // Curve normals (ribbons) have no place in a groom: say they are left.
+    if prim.attribute("normals").is_some_and(|a| {
+        a.static_value()
+            .is_some_and(|v| !matches!(v, Value::Blocked))
+    }) {
+        set.losses
+            .push("skipped normals: a groom holds tubes, not oriented ribbons".into());
+    }
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()
@@ -797,7 +818,8 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
                     .push((name.clone(), attribute.type_name.clone()));
                 set.attributes.push(converted)
             }
-            Err(note) => set.notes.push(note),
+            Err(loss) if loss.is_empty() => {}
+            Err(loss) => set.losses.push(loss),
         }
     }
     Ok(set)
@@ -814,7 +836,8 @@ fn primvar(
 ) -> Result<Result<Attribute, String>, ImportError> {
     let skip = |why: &str| Ok(Err(format!("skipped {}: {why}", attribute.name)));
     let Some(value) = attribute.static_value() else {
-        return skip("no value");
+        // Declared without a value: nothing to keep.
+        return Ok(Err(String::new()));
     };
     if let Some(size) = attribute.element_size.filter(|&s| s != 1.0) {
         return skip(&format!("elementSize {size}"));
@@ -866,12 +889,16 @@ fn primvar(
     } else {
         interpolation
     };
+    let cubic = set.basis != CurveBasis::Linear;
     let (scope, expected) = match interpolation {
         "vertex" => (Scope::Vertex, vertices),
-        "varying" if elements == vertices => (Scope::Vertex, vertices),
+        "varying" if cubic => (Scope::Vertex, varying_count(set)),
+        "varying" if set.wrap == "periodic" => {
+            return skip("varying interpolation of periodic linear curves")
+        }
+        "varying" => (Scope::Vertex, vertices),
         "uniform" => (Scope::Strand, strands),
         "constant" => (Scope::Strand, 1),
-        "varying" => return skip("varying interpolation of cubic curves"),
         other => return skip(&format!("{other} interpolation")),
     };
     if elements != expected {
@@ -887,6 +914,9 @@ fn primvar(
     if interpolation == "constant" {
         let one = data.clone();
         data = (0..strands).flat_map(|_| one.iter().copied()).collect();
+    }
+    if interpolation == "varying" && cubic {
+        data = varying_to_vertex(&data, components, set);
     }
     let integral = matches!(
         base_type,
@@ -920,6 +950,80 @@ fn primvar(
         scope,
         values,
     }))
+}
+
+/// Vertices from one cubic segment to the next: 3 for bezier, 1 for the
+/// others.
+fn vstep(basis: CurveBasis) -> usize {
+    match basis {
+        CurveBasis::Bezier => 3,
+        CurveBasis::Hermite => 2,
+        CurveBasis::Power => 4,
+        _ => 1,
+    }
+}
+
+/// Values of one cubic curve of `n` vertices under `varying` interpolation
+/// (one per segment end), as usd-core counts them: periodic curves
+/// `n / vstep`; nonperiodic and pinned ones (pinned curves author no data
+/// for their extra segments) `max((n - 4) / vstep, 0) + 2`.
+fn varying_of_curve(n: usize, basis: CurveBasis, wrap: &str) -> usize {
+    let step = vstep(basis);
+    if wrap == "periodic" {
+        n / step
+    } else {
+        n.saturating_sub(4) / step + 2
+    }
+}
+
+fn varying_count(set: &CurveSet) -> usize {
+    set.counts
+        .iter()
+        .map(|&n| varying_of_curve(n as usize, set.basis, &set.wrap))
+        .sum()
+}
+
+/// Cubic `varying` values (per segment end) as per-vertex values. Segment
+/// end `j` of a curve is at vertex `j * vstep` (bezier, and every periodic
+/// curve) or `j + 1` (nonperiodic and pinned bspline and catmullRom, whose
+/// first and last vertices only steer the ends): each varying value is kept
+/// exactly at its vertex; vertices between ends take the linear blend of
+/// the two ends, as renderers interpolate varying data, and the vertices
+/// before the first end and after the last take the nearest end's value.
+fn varying_to_vertex(data: &[f64], components: usize, set: &CurveSet) -> Vec<f64> {
+    let step = vstep(set.basis);
+    let periodic = set.wrap == "periodic";
+    let offset = if step == 1 && !periodic { 1.0 } else { 0.0 };
+    let mut out = Vec::with_capacity(set.points.len() * components);
+    let mut start = 0;
+    for &n in &set.counts {
+        let m = varying_of_curve(n as usize, set.basis, &set.wrap);
+        let values = data
+            .get(start * components..(start + m) * components)
+            .unwrap_or(&[]);
+        start += m;
+        for k in 0..n as usize {
+            let s = (k as f64 - offset) / step as f64;
+            let s = if periodic {
+                s
+            } else {
+                s.clamp(0.0, m.saturating_sub(1) as f64)
+            };
+            let (j, t) = (s.floor() as usize, s.fract());
+            let next = if periodic && m > 0 {
+                (j + 1) % m
+            } else {
+                (j + 1).min(m.saturating_sub(1))
+            };
+            let j = if m > 0 { j % m } else { 0 };
+            for c in 0..components {
+                let a = values.get(j * components + c).copied().unwrap_or(0.0);
+                let b = values.get(next * components + c).copied().unwrap_or(a);
+                out.push(if t == 0.0 { a } else { a + (b - a) * t });
+            }
+        }
+    }
+    out
 }
 
 /// Index of a basis in the per-strand `curve_basis` attribute of grooms
@@ -1005,6 +1109,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     let mut worlds: Vec<Matrix> = Vec::with_capacity(stage.prims.len());
     let mut active: Vec<bool> = Vec::with_capacity(stage.prims.len());
     let mut sets: Vec<(String, CurveSet)> = Vec::new();
+    let mut skipped: Vec<(String, ImportError)> = Vec::new();
     for (index, prim) in stage.prims.iter().enumerate() {
         let parent = prim.parent.filter(|&p| p < index);
         let (parent_world, parent_active) = match parent {
@@ -1028,15 +1133,37 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         worlds.push(world);
         active.push(is_active);
         if is_active && prim.type_name == "BasisCurves" {
-            sets.push((prim.path.clone(), curve_set(file, prim, &world)?));
+            // A prim that cannot be read is left out, with a warning naming
+            // it, as usd-core reads the others; the file is refused only
+            // when no curves are left.
+            if prim.attribute("points").is_some() {
+                check_one_topology(file, prim)?;
+            }
+            match curve_set(file, prim, &world) {
+                Ok(set) => sets.push((prim.path.clone(), set)),
+                Err(error) => skipped.push((prim.path.clone(), error)),
+            }
         }
     }
     if sets.is_empty() {
+        if let Some((_, error)) = skipped.into_iter().next() {
+            return Err(error);
+        }
         return Err(ImportError::malformed(
             file,
             Place::File,
             "no BasisCurves prim defined in the file",
         ));
+    }
+    for (path, error) in &skipped {
+        let why = match error {
+            ImportError::Malformed { message, .. } => message.clone(),
+            other => other.to_string(),
+        };
+        groom
+            .provenance
+            .losses
+            .push(format!("skipped curves prim {path}: {why}"));
     }
 
     // Frames: every animated prim must be sampled at the same time codes;
@@ -1152,6 +1279,12 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                     }
                 }
                 None => {
+                    if strands_before > 0 {
+                        groom.provenance.losses.push(format!(
+                            "the curves before {path} have no {}: 0 for their {strands_before} strands",
+                            usd_name(&attribute.name)
+                        ));
+                    }
                     let mut values = empty_like(&attribute.values, before);
                     append(&mut values, &attribute.values);
                     groom.attributes.push(Attribute {
@@ -1173,7 +1306,11 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         groom.strand_vertex_counts.extend_from_slice(&set.counts);
         groom.points.extend_from_slice(&set.points);
         notes.extend(set.notes.into_iter().map(|n| format!("{path}: {n}")));
-        // Attributes this prim lacks are zero for its strands.
+        groom
+            .provenance
+            .losses
+            .extend(set.losses.into_iter().map(|loss| format!("{path}: {loss}")));
+        // Attributes this prim lacks are zero for its strands: say so.
         let (vertices, strands) = (groom.points.len(), groom.strand_vertex_counts.len());
         for attribute in &mut groom.attributes {
             let target = match attribute.scope {
@@ -1184,6 +1321,11 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             if missing > 0 {
                 let zeros = empty_like(&attribute.values, missing);
                 append(&mut attribute.values, &zeros);
+                groom.provenance.losses.push(format!(
+                    "{path} has no {}: 0 for its {} strands",
+                    usd_name(&attribute.name),
+                    set.counts.len()
+                ));
             }
         }
     }
@@ -1198,7 +1340,9 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 .zip(&group_ids)
                 .all(|(&guide, &group)| guide == (group == 0))
         });
-    if several && !guides_then_render {
+    // Synthesised only where the file has none: a group_id primvar (as
+    // groombake writes it) is the source's own and is kept.
+    if several && !guides_then_render && groom.attribute("group_id").is_none() {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
             AttributeValues::Int(group_ids),
@@ -1226,6 +1370,15 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     }
     groom.provenance.info = notes.join("; ");
     Ok(groom)
+}
+
+/// The USD name of a groom attribute, for messages.
+fn usd_name(attribute: &str) -> String {
+    match attribute {
+        "width" => "widths".into(),
+        "root_uv" => "primvars:st".into(),
+        other => format!("primvars:{other}"),
+    }
 }
 
 /// Index of a wrap in the per-strand `curve_wrap` attribute of grooms that
