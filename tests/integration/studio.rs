@@ -390,3 +390,42 @@ fn closest_guides_are_integers_in_usd() {
         "{text}"
     );
 }
+
+/// A file whose curve counts change over time compares with its copy
+/// stretch by stretch (it used to exit 2, as a bake refuses it), and a
+/// moved point in the second stretch is found there.
+#[test]
+fn diff_compares_a_changing_topology_stretch_by_stretch() {
+    let dir = TestDir::new();
+    let source = openusd("testUsdImagingGLBasisCurvesVaryingTopology_bunnyCurves.usda");
+    dir.run_ok(&["convert", &source, "copy.usdc"]);
+    let out = dir.run_ok(&["diff", &source, "copy.usdc"]);
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("equal within"));
+    let mut sequence = importers::read_sequence(Path::new(&source)).unwrap();
+    assert!(sequence.len() > 1);
+    sequence[1].frames[0].points[0][0] += 0.5;
+    exporters::write_sequence(&dir.path("moved.usda"), &sequence).unwrap();
+    let output = dir
+        .command()
+        .args(["diff", &source, "moved.usda"])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        text.contains("topology 1: points frame 0 strand 0"),
+        "{text}"
+    );
+    // Against a one-topology file: a structural difference, not a refusal.
+    let output = dir
+        .command()
+        .args([
+            "diff",
+            &source,
+            &openusd("testUsdImagingGLCurves_pinnedCurves.usda"),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("topologies: A has"));
+}
