@@ -73,6 +73,11 @@ pub struct Provenance {
     /// for), keyed `<format>.<field>`. A writer honours them only while the
     /// groom still matches what they describe.
     pub metadata: std::collections::BTreeMap<String, String>,
+    /// What the reader could not keep of the file (a prim it skipped, a
+    /// primvar it dropped), one line each naming it (not the file, which
+    /// the caller names): `convert`, `inspect` and the bake print them as
+    /// warnings, and `--strict` refuses them.
+    pub losses: Vec<String>,
 }
 
 /// One time sample of every point of the groom (same topology as the groom).

@@ -167,7 +167,10 @@ fn bake_and_report(
             );
         }
         for output in &report.outputs {
-            eprintln!("wrote {} ({} bytes)", output.path, output.bytes);
+            match &output.written_in {
+                Some(units) => eprintln!("wrote {} ({} bytes, {units})", output.path, output.bytes),
+                None => eprintln!("wrote {} ({} bytes)", output.path, output.bytes),
+            }
         }
     }
     for warning in &report.warnings {

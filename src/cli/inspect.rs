@@ -112,6 +112,11 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let groom = &grooms[0];
     let mut summary = summary(groom);
     summary["topology"] = json!(topology(&grooms));
+    let losses = super::losses(&args.file, &grooms);
+    summary["warnings"] = json!(losses);
+    for loss in &losses {
+        eprintln!("groombake: warning: {loss}");
+    }
     if grooms.len() > 1 {
         // Frames of the whole sequence; the other facts are of the first
         // topology.

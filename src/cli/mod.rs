@@ -212,6 +212,19 @@ pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>
     Ok(grooms)
 }
 
+/// What the readers could not keep of the grooms' file (`Provenance::losses`),
+/// each line once (a changing topology is read once per stretch).
+pub fn losses(file: &std::path::Path, grooms: &[groom::Groom]) -> Vec<String> {
+    let mut all: Vec<String> = Vec::new();
+    for loss in grooms.iter().flat_map(|g| &g.provenance.losses) {
+        let line = format!("{}: {loss}", file.display());
+        if !all.contains(&line) {
+            all.push(line);
+        }
+    }
+    all
+}
+
 /// Reads a groom file and refuses one with fatal problems, naming the first.
 pub fn read_groom(path: &std::path::Path) -> anyhow::Result<groom::Groom> {
     let groom = importers::read(path)?;

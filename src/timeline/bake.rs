@@ -475,18 +475,18 @@ struct AnimatedExport {
     up: UpAxis,
 }
 
-fn export_units(timeline: &Timeline, index: usize) -> (Units, UpAxis) {
+/// What export `index` is written as: its `units`/`up`, else its `target`'s
+/// preset, else the format's default (`exporters::destination`).
+fn export_destination(timeline: &Timeline, index: usize) -> exporters::Destination {
     let e = &timeline.file.exports[index];
-    let units = e
-        .units
-        .as_ref()
-        .and_then(|u| u.get_ref().parse().ok())
-        .unwrap_or_else(|| exporters::default_units(Path::new(e.path.get_ref()), Units::METERS));
-    let up =
-        e.up.as_ref()
-            .and_then(|u| u.get_ref().parse().ok())
-            .unwrap_or(UpAxis::Y);
-    (units, up)
+    exporters::destination(
+        Path::new(e.path.get_ref()),
+        e.target.as_ref().and_then(|t| t.get_ref().parse().ok()),
+        e.units.as_ref().and_then(|u| u.get_ref().parse().ok()),
+        e.up.as_ref().and_then(|u| u.get_ref().parse().ok()),
+        Units::METERS,
+        UpAxis::Y,
+    )
 }
 
 /// The groom with the current pose and the simulation's per-vertex
@@ -610,6 +610,7 @@ fn output_report(
         bytes,
         sha256,
         frames,
+        written_in: None,
     })
 }
 
@@ -640,14 +641,17 @@ fn with_frames_from_positions(
 
 /// What each export must change about the groom's data, one line per kind
 /// (checked before simulating, so `--strict` refuses before any work).
-fn export_warnings(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
+fn export_warnings_of(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
     if options.dry {
         return Vec::new();
     }
     (0..timeline.file.exports.len())
         .flat_map(|index| {
             let path = output_path(options, timeline.file.exports[index].path.get_ref());
-            exporters::warnings(&path, groom, export_units(timeline, index).0)
+            let destination = export_destination(timeline, index);
+            let mut converted = groom.clone();
+            converted.convert_to(destination.units, destination.up);
+            exporters::warnings(&path, &converted, destination.units)
         })
         .collect()
 }
@@ -775,7 +779,19 @@ impl<'a> BakeRun<'a> {
             seed,
             sag_free,
         } = prepare(timeline, options.seed)?;
-        let export_warnings = export_warnings(timeline, options, &groom);
+        // What the reader left out of the source, then what the exports
+        // must change.
+        let source = timeline.file.groom.source.as_ref();
+        let mut export_warnings: Vec<String> = groom
+            .provenance
+            .losses
+            .iter()
+            .map(|loss| match source {
+                Some(source) => format!("{}: {loss}", timeline.resolve(source.get_ref()).display()),
+                None => loss.clone(),
+            })
+            .collect();
+        export_warnings.extend(export_warnings_of(timeline, options, &groom));
         if let (true, Some(first)) = (options.strict, export_warnings.first()) {
             return Err(BakeError::Input {
                 file: timeline.path.clone(),
@@ -881,7 +897,8 @@ impl<'a> BakeRun<'a> {
             }
             let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
             let frame_count = (self.total_time * fps + 1e-6).floor() as usize + 1;
-            let (units, up) = export_units(self.timeline, index);
+            let destination = export_destination(self.timeline, index);
+            let (units, up) = (destination.units, destination.up);
             let guides = self.groom_now(false);
             let delivery = super::render::Delivery::new(
                 self.render.as_ref(),
@@ -890,10 +907,11 @@ impl<'a> BakeRun<'a> {
             );
             let mut base = delivery.groom(self.render.as_ref(), &guides);
             base.convert_to(units, up);
-            let writer = exporters::animated(
+            let writer = exporters::animated_as(
                 &self.staged[index],
                 &base,
                 exporters::AnimationOptions { fps, frame_count },
+                destination.attributes,
             )?;
             self.animated.push(AnimatedExport {
                 index,
@@ -1228,8 +1246,9 @@ impl<'a> BakeRun<'a> {
         for (index, e) in self.exports.iter().enumerate() {
             self.options.interrupted()?;
             let (path, staged) = (&self.finals[index], &self.staged[index]);
+            let destination = export_destination(self.timeline, index);
             if e.what != ExportWhat::Animated {
-                let (units, up) = export_units(self.timeline, index);
+                let (units, up) = (destination.units, destination.up);
                 let mut out = match e.what {
                     ExportWhat::Final => self.groom_now(false),
                     ExportWhat::Rest => {
@@ -1244,12 +1263,12 @@ impl<'a> BakeRun<'a> {
                     super::render::curve_form(e),
                 );
                 out.convert_to(units, up);
-                exporters::write(staged, &out)?;
+                exporters::write_as(staged, &out, destination.attributes)?;
             }
             let what = format!("{:?}", e.what).to_lowercase();
-            self.report
-                .outputs
-                .push(output_report(staged, path, what, frames_of[index])?);
+            let mut output = output_report(staged, path, what, frames_of[index])?;
+            output.written_in = exporters::written_in(path, destination.units, destination.up);
+            self.report.outputs.push(output);
         }
         if let (Some(_), false) = (&self.timeline.file.preview, self.options.dry) {
             let index = self.exports.len();

@@ -421,6 +421,11 @@ impl Timeline {
                 }
                 (None, _) => {}
             }
+            if let Some(target) = &e.target {
+                if let Err(message) = target.get_ref().parse::<exporters::Target>() {
+                    return fail(target.span(), message);
+                }
+            }
             if let Some(units) = &e.units {
                 if let Err(message) = units.get_ref().parse::<groom::Units>() {
                     return fail(units.span(), message);

@@ -38,6 +38,10 @@ pub struct OutputReport {
     pub sha256: String,
     /// Frames written (animated exports).
     pub frames: Option<usize>,
+    /// The units and up axis of an Alembic or `.obj` export, which the file
+    /// cannot record for other programs (`"m, Y up"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub written_in: Option<String>,
 }
 
 /// A strand the watchdog contained: at which step of the stage, and why.

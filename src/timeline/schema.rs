@@ -545,7 +545,12 @@ pub struct ExportSpec {
     pub what: ExportWhat,
     /// Frames per second of an animated export.
     pub fps: Option<Spanned<f64>>,
-    /// Units of the file (default: the format's, `exporters::default_units`).
+    /// The program the file is for (`unreal`, `maya`, `houdini`, `blender`,
+    /// `usd`): a preset of units, up axis and attribute names
+    /// (`exporters::Target`); `units` and `up` override it.
+    pub target: Option<Spanned<String>>,
+    /// Units of the file (default: the target's, else the format's,
+    /// `exporters::default_units`).
     pub units: Option<Spanned<String>>,
     /// Up axis of the file (default y).
     pub up: Option<Spanned<String>>,

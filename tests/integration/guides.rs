@@ -48,8 +48,15 @@ fn unreal_alembic_keeps_the_split_and_round_trips_byte_stable() {
     assert_eq!(closest[3], [0.0, 1.0, 2.0]);
     assert_eq!(vec3s(&source, GROOM_GUIDE_WEIGHTS)[3], [0.6, 0.3, 0.1]);
 
-    dir.run_ok(&["convert", fixture.to_str().unwrap(), "a.abc"]);
-    dir.run_ok(&["convert", "a.abc", "b.abc"]);
+    // For Unreal: its units (cm) and groom attributes.
+    dir.run_ok(&[
+        "convert",
+        fixture.to_str().unwrap(),
+        "a.abc",
+        "--target",
+        "unreal",
+    ]);
+    dir.run_ok(&["convert", "a.abc", "b.abc", "--target", "unreal"]);
     let a = std::fs::read(dir.path("a.abc")).unwrap();
     assert_eq!(a, std::fs::read(dir.path("b.abc")).unwrap());
     let back = read(&dir.path("a.abc"));
@@ -89,13 +96,16 @@ fn a_bake_grows_render_hair_that_follows_the_guides() {
 [[export]]
 path = "final.abc"
 what = "final"
+target = "unreal"
 [[export]]
 path = "rest.abc"
 what = "rest"
+target = "unreal"
 [[export]]
 path = "anim.abc"
 what = "animated"
 fps = 20
+target = "unreal"
 [[export]]
 path = "final.glb"
 what = "final"

@@ -339,7 +339,7 @@ fn outputs_are_compared_by_canonical_path() {
 #[test]
 fn no_output_holds_a_value_that_overflows_in_the_files_units() {
     let dir = TestDir::new();
-    // 1.7e38 m is a finite f32; Alembic stores centimetres: infinite.
+    // 1.7e38 m is a finite f32; in centimetres it is infinite.
     std::fs::write(
         dir.path("big.obj"),
         "v 1.7e38 0 0\nv 1.7e38 1 0\nv 1.7e38 2 0\nl 1 2 3\n",
@@ -353,15 +353,15 @@ fn no_output_holds_a_value_that_overflows_in_the_files_units() {
             "--source-units",
             "m",
             "--units",
-            "m",
+            "cm",
         ],
         1,
     );
     assert!(stderr.contains("not finite"), "{stderr}");
     assert!(!dir.path("big.abc").exists());
     let text = timeline(
-        "[[export]]\npath = \"anim.abc\"\nwhat = \"animated\"\n\
-         [[export]]\npath = \"final.abc\"\nwhat = \"final\"\n",
+        "[[export]]\npath = \"anim.abc\"\nwhat = \"animated\"\nunits = \"cm\"\n\
+         [[export]]\npath = \"final.abc\"\nwhat = \"final\"\nunits = \"cm\"\n",
     )
     .replace("[[stage]]", "translate = [1.7e38, 0.0, 0.0]\n[[stage]]");
     std::fs::write(dir.path("t.toml"), text).unwrap();

@@ -24,4 +24,5 @@ mod readme;
 mod refusals;
 mod roundtrip;
 mod samples;
+mod studio;
 mod usd;

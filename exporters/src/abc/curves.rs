@@ -3,11 +3,13 @@
 //! `curveBasisAndType`, `width`, `uv` and `.arbGeomParams` with the other
 //! attributes and the Unreal Engine groom attributes (`groom_*`).
 //!
-//! Unreal reads Alembic grooms as centimetres, Y up: the groom is converted
-//! to that before writing.
+//! The file holds the groom's units (recorded as `groombake_units` in the
+//! archive metadata, since Alembic has no unit field), Y up, the axis every
+//! Alembic reader assumes: the groom is rotated to Y up before writing. The
+//! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
 
 use super::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter, TimeSampling};
-use crate::{AnimationOptions, ExportError, FrameWriter};
+use crate::{AnimationOptions, AttributeSet, ExportError, FrameWriter};
 use groom::{AtomicFile, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::{Path, PathBuf};
 
@@ -15,7 +17,7 @@ const CURVES_SCHEMA: &str = "AbcGeom_Curve_v2";
 const GEOM_BASE: &str = "AbcGeom_GeomBase_v1";
 const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
 /// The groom schema version Unreal's importer is written for.
-const UNREAL_GROOM_VERSION: (i32, i32) = (1, 5);
+const UNREAL_GROOM_VERSION: (i16, i16) = (1, 5);
 /// Frame times closer than this to a uniform grid are written as uniform
 /// sampling.
 const UNIFORM_TOLERANCE: f64 = 1e-6;
@@ -31,7 +33,7 @@ fn io_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + '_ {
 
 /// Writes a static groom; a groom with frames is written animated, at the
 /// rate its frame times give.
-pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
+pub fn write(path: &Path, groom: &Groom, attributes: AttributeSet) -> Result<(), ExportError> {
     if !groom.frames.is_empty() {
         let fps = match (groom.frames.first(), groom.frames.get(1)) {
             (Some(a), Some(b)) if b.time > a.time => 1.0 / (b.time - a.time),
@@ -41,13 +43,13 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
             fps,
             frame_count: groom.frames.len(),
         };
-        let mut writer = animated(path, groom, options)?;
+        let mut writer = animated(path, groom, options, attributes)?;
         for frame in &groom.frames {
             writer.write_frame(frame)?;
         }
         return writer.finish();
     }
-    let mut export = CurvesExport::start(path, groom, None)?;
+    let mut export = CurvesExport::start(path, groom, None, attributes)?;
     let points = export.converted(&groom.points);
     export.add_sample(&points)?;
     export.finish()
@@ -58,6 +60,7 @@ pub fn animated(
     path: &Path,
     groom: &Groom,
     options: AnimationOptions,
+    attributes: AttributeSet,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     if !(options.fps.is_finite() && options.fps > 0.0) {
         return Err(ExportError::Invalid {
@@ -69,6 +72,7 @@ pub fn animated(
         path,
         groom,
         Some(options.fps),
+        attributes,
     )?))
 }
 
@@ -211,7 +215,12 @@ fn bounds_bytes(points: &[[f32; 3]]) -> Vec<u8> {
 }
 
 impl CurvesExport {
-    fn start(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesExport, ExportError> {
+    fn start(
+        path: &Path,
+        groom: &Groom,
+        fps: Option<f64>,
+        attributes: AttributeSet,
+    ) -> Result<CurvesExport, ExportError> {
         let file = AtomicFile::create(path).map_err(io_error(path))?;
         let mut archive = ArchiveWriter::new(file).map_err(io_error(path))?;
         // Index 1 is the animation's sampling; its times are set at the end.
@@ -224,8 +233,9 @@ impl CurvesExport {
         y_up.convert_to(groom.units, UpAxis::Y);
         let fixed = Self::fixed_properties(&mut archive, &y_up, animated_sampling)
             .map_err(io_error(path))?;
-        let arbitrary = Self::arbitrary_properties(&mut archive, &y_up, animated_sampling)
-            .map_err(io_error(path))?;
+        let arbitrary =
+            Self::arbitrary_properties(&mut archive, &y_up, animated_sampling, attributes)
+                .map_err(io_error(path))?;
         Ok(CurvesExport {
             path: path.to_path_buf(),
             archive,
@@ -324,40 +334,34 @@ impl CurvesExport {
         archive: &mut ArchiveWriter<AtomicFile>,
         groom: &Groom,
         sampling: u32,
+        attributes: AttributeSet,
     ) -> std::io::Result<Vec<PropertyWriter>> {
         let strands = groom.strand_count();
-        let mut params: Vec<(String, &'static str, AttributeValues)> = vec![
-            (
-                "groom_version_major".into(),
-                "con",
-                AttributeValues::Int(vec![UNREAL_GROOM_VERSION.0]),
-            ),
-            (
-                "groom_version_minor".into(),
-                "con",
-                AttributeValues::Int(vec![UNREAL_GROOM_VERSION.1]),
-            ),
-            (
-                "groom_guide".into(),
-                "uni",
-                AttributeValues::Int(vec![0; strands]),
-            ),
-            (
-                "groom_group_id".into(),
-                "uni",
-                AttributeValues::Int(vec![0; strands]),
-            ),
-        ];
-        if let Some(uv) = root_uv(groom) {
-            params.push(("groom_root_uv".into(), "uni", AttributeValues::Vec2(uv)));
-        }
         let width = width_attribute(groom);
-        if let Some(width) = width {
-            params.push((
-                "groom_width".into(),
-                scope_code(width.scope),
-                width.values.clone(),
-            ));
+        let mut params: Vec<(String, &'static str, AttributeValues)> = Vec::new();
+        if attributes == AttributeSet::WithUnreal {
+            params.extend([
+                (
+                    "groom_guide".into(),
+                    "uni",
+                    AttributeValues::Int(vec![0; strands]),
+                ),
+                (
+                    "groom_group_id".into(),
+                    "uni",
+                    AttributeValues::Int(vec![0; strands]),
+                ),
+            ]);
+            if let Some(uv) = root_uv(groom) {
+                params.push(("groom_root_uv".into(), "uni", AttributeValues::Vec2(uv)));
+            }
+            if let Some(width) = width {
+                params.push((
+                    "groom_width".into(),
+                    scope_code(width.scope),
+                    width.values.clone(),
+                ));
+            }
         }
         for attribute in &groom.attributes {
             let is_width = width.is_some_and(|w| w.name == attribute.name);
@@ -373,6 +377,28 @@ impl CurvesExport {
             }
         }
         let mut open = Vec::new();
+        if attributes == AttributeSet::WithUnreal {
+            // Unreal's Alembic groom schema gives the version as int16
+            // scalars of the whole groom.
+            for (name, value) in [
+                ("groom_version_major", UNREAL_GROOM_VERSION.0),
+                ("groom_version_minor", UNREAL_GROOM_VERSION.1),
+            ] {
+                if groom.attribute(name).is_some() {
+                    continue;
+                }
+                let mut property = PropertyWriter::new(
+                    name,
+                    geom_param_metadata("con", Pod::I16, 1),
+                    PropertyKind::Array,
+                    Pod::I16,
+                    1,
+                    sampling,
+                );
+                property.set_sample(archive, &value.to_le_bytes())?;
+                open.push(property);
+            }
+        }
         for (name, scope, values) in params {
             let (pod, extent, bytes, metadata) = match unreal_triple(&name, &values) {
                 Some((pod, bytes)) => (pod, 1, bytes, triple_metadata(scope, pod)),
@@ -645,7 +671,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("groombake-abc-hash-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("two.abc");
-        write(&path, &two_strands()).unwrap();
+        write(&path, &two_strands(), AttributeSet::default()).unwrap();
         let ours = std::fs::read(&path).unwrap();
         let reference = include_bytes!("../../tests/data/reference_static.abc");
         assert_eq!(object_hashes(&ours), object_hashes(reference));
@@ -666,7 +692,7 @@ mod tests {
             fps: 24.0,
             frame_count: 4,
         };
-        let mut writer = animated(&path, &groom, options).unwrap();
+        let mut writer = animated(&path, &groom, options, AttributeSet::default()).unwrap();
         for (i, pose) in [&pose_a, &pose_b, &pose_a, &pose_a].into_iter().enumerate() {
             let frame = Frame {
                 time: 0.5 + i as f64 / 24.0,
@@ -686,8 +712,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("groombake-abc-det-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (a, b) = (dir.join("a.abc"), dir.join("b.abc"));
-        write(&a, &two_strands()).unwrap();
-        write(&b, &two_strands()).unwrap();
+        write(&a, &two_strands(), AttributeSet::default()).unwrap();
+        write(&b, &two_strands(), AttributeSet::default()).unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -31,6 +31,7 @@ mod type_id {
     pub const TOKEN: u8 = 11;
     pub const VEC2F: u8 = 20;
     pub const VEC3F: u8 = 24;
+    pub const VEC3I: u8 = 26;
     pub const TOKEN_VECTOR: u8 = 41;
     pub const SPECIFIER: u8 = 42;
     pub const VARIABILITY: u8 = 44;
@@ -157,6 +158,11 @@ impl CrateWriter {
                 v.iter().flatten().flat_map(|x| x.to_le_bytes()),
             )?,
             PropertyValue::Float3s(v) => self.write_float3s(v)?,
+            PropertyValue::Int3s(v) => self.write_array(
+                type_id::VEC3I,
+                v.len(),
+                v.iter().flatten().flat_map(|x| x.to_le_bytes()),
+            )?,
         }))
     }
 

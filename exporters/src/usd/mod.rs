@@ -287,6 +287,7 @@ pub(crate) enum PropertyValue {
     Floats(Vec<f32>),
     Float2s(Vec<[f32; 2]>),
     Float3s(Vec<[f32; 3]>),
+    Int3s(Vec<[i32; 3]>),
 }
 
 /// One attribute of the curves prim.
@@ -427,6 +428,7 @@ impl CurvesScene {
                 PropertyValue::Floats(v) => *v = Vec::new(),
                 PropertyValue::Float2s(v) => *v = Vec::new(),
                 PropertyValue::Float3s(v) => *v = Vec::new(),
+                PropertyValue::Int3s(v) => *v = Vec::new(),
             }
         }
     }
@@ -534,6 +536,13 @@ fn curves_prim(
                 "primvars:st".to_string(),
                 "texCoord2f[]",
                 PropertyValue::Float2s(v.clone()),
+            ),
+            // Guide indices are integers, as Unreal's Alembic schema and
+            // groombake's Alembic writer store them (int32 x 3).
+            (groom::guides::GROOM_CLOSEST_GUIDES, AttributeValues::Vec3(v)) => (
+                format!("primvars:{}", groom::guides::GROOM_CLOSEST_GUIDES),
+                "int3[]",
+                PropertyValue::Int3s(v.iter().map(|g| g.map(|x| x.round() as i32)).collect()),
             ),
             (attribute_name, values) => {
                 let name = format!("primvars:{}", identifier(attribute_name));

@@ -139,6 +139,9 @@ fn write_value(text: &mut String, value: &PropertyValue) {
             let _ = write!(t, "({}, {})", Num(v[0]), Num(v[1]));
         }),
         PropertyValue::Float3s(values) => write_float3s(text, values),
+        PropertyValue::Int3s(values) => write_list(text, values, |t, v| {
+            let _ = write!(t, "({}, {}, {})", v[0], v[1], v[2]);
+        }),
     }
 }
 

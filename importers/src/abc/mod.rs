@@ -341,15 +341,13 @@ mod tests {
         for name in ["width", "root_uv", "wetness", "bond_rates", "clump"] {
             assert_eq!(back.attribute(name), groom.attribute(name), "{name}");
         }
-        // Unreal's per-strand and per-vertex groom attributes come back too.
-        assert_eq!(
-            back.attribute("groom_width").map(|a| &a.values),
-            groom.attribute("width").map(|a| &a.values)
-        );
-        assert_eq!(
-            back.attribute("groom_guide").map(|a| (&a.values, a.scope)),
-            Some((&AttributeValues::Int(vec![0, 0]), Scope::Strand))
-        );
+        // Unreal's groom_width repeats width: one attribute per meaning.
+        assert!(back.attribute("groom_width").is_none());
+        assert!(back.attribute("groom_root_uv").is_none());
+        // Unreal's defaults (no guides, one group) mean what their absence
+        // means: not kept.
+        assert!(back.attribute("groom_guide").is_none());
+        assert!(back.attribute("groom_group_id").is_none());
         assert!(back.provenance.info.starts_with("groombake "));
     }
 

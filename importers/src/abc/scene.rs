@@ -582,6 +582,12 @@ impl SceneReader<'_, '_> {
         }
         let count = values.len() / extent;
         let declared = property.metadata.get("geoScope").unwrap_or_default();
+        // Groom-level values (such as Unreal's groom_version_major) have no
+        // place in a groom's per-strand or per-vertex attributes, also when
+        // the groom has one strand or one point.
+        if declared == "con" && count == 1 && name != "width" {
+            return Ok(None);
+        }
         let scope = if count == vertex_count
             && (count != curve_count || declared == "vtx" || declared == "var")
         {
@@ -717,7 +723,35 @@ fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
         }
         groom.set_attribute(merged);
     }
+    one_attribute_per_meaning(&mut groom);
     Ok(groom)
+}
+
+/// Unreal's `groom_width` and `groom_root_uv` say what the schema's `width`
+/// and `uv` say: a groom keeps one attribute per meaning (the schema's when
+/// both are present), so a re-read and re-written file does not gain a copy.
+///
+/// `groom_guide` and `groom_group_id` of all zeros are Unreal's defaults (no
+/// guides, one group), what a groom without them means: not kept either.
+fn one_attribute_per_meaning(groom: &mut Groom) {
+    for name in ["groom_guide", "groom_group_id"] {
+        let zeros = groom.attribute(name).is_some_and(|a| match &a.values {
+            AttributeValues::Int(v) => v.iter().all(|&x| x == 0),
+            AttributeValues::Float(v) => v.iter().all(|&x| x == 0.0),
+            _ => false,
+        });
+        if zeros {
+            groom.remove_attribute(name);
+        }
+    }
+    for (unreal, own) in [("groom_width", "width"), ("groom_root_uv", "root_uv")] {
+        if let Some(mut attribute) = groom.remove_attribute(unreal) {
+            if groom.attribute(own).is_none() {
+                attribute.name = own.to_string();
+                groom.set_attribute(attribute);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
