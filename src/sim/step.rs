@@ -145,6 +145,7 @@ struct Context<'a> {
     bonds_still: bool,
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
+    hydrogen_reform: Option<&'a [f32]>,
     hair_hair: Option<(f32, &'a EdgeGrid)>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
@@ -332,6 +333,15 @@ impl Solver {
                 )));
             }
         }
+        if let Some(reform) = environment.hydrogen_reform {
+            if reform.len() != strands.vertex_count() || reform.iter().any(|r| !r.is_finite()) {
+                return Err(SimError::Environment(format!(
+                    "hydrogen_reform needs {} finite values, has {}",
+                    strands.vertex_count(),
+                    reform.len()
+                )));
+            }
+        }
         let targets_nan = environment
             .bond_rate_targets
             .iter()
@@ -458,9 +468,11 @@ impl Solver {
             },
             bonds_still: environment.bond_rate_drive.iter().all(|r| *r * dt == 0.0)
                 && environment.bond_rate_targets.iter().all(Option::is_none)
-                && environment.blower.is_none(),
+                && environment.blower.is_none()
+                && environment.hydrogen_reform.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
+            hydrogen_reform: environment.hydrogen_reform,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
             volume: volumetric,
             colliders: &prepared,
@@ -667,6 +679,9 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             blower_dv_here = work.blower[i];
         } else {
             work.db[i][0] = 0.0;
+        }
+        if let Some(reform) = ctx.hydrogen_reform {
+            work.db[i][0] += reform[s.first_vertex + i];
         }
         let control = s.controls[i];
         if control.targeted {

@@ -22,4 +22,5 @@ mod preview;
 mod refusals;
 mod roundtrip;
 mod samples;
+mod treatments;
 mod usd;

@@ -9,6 +9,7 @@
 
 mod compose;
 mod crate_reader;
+mod frame_primvars;
 mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
@@ -27,6 +28,7 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     let mut groom = to_groom(path, &stage)?;
+    frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
 }
@@ -44,6 +46,7 @@ pub fn read_sequence_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Groom>, Impo
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     if !topology_is_sampled(&stage) {
         let mut groom = to_groom(path, &stage)?;
+        frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
         groom.provenance.format = "usd".into();
         return Ok(vec![groom]);
     }
@@ -108,6 +111,7 @@ fn topology_sequence(path: &Path, stage: &Stage) -> Result<Vec<Groom>, ImportErr
         let frame = Frame {
             time: code / codes_per_second,
             points: std::mem::take(&mut groom.points),
+            attributes: Vec::new(),
         };
         match grooms.last_mut() {
             Some(run) if run.strand_vertex_counts == groom.strand_vertex_counts => {
@@ -1061,6 +1065,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             .map(|&code| Frame {
                 time: code / codes_per_second,
                 points: Vec::new(),
+                attributes: Vec::new(),
             })
             .collect();
     }
