@@ -145,11 +145,14 @@ def check_curves(obj, file_name, failures, totals):
     totals["arbitrary"].append(names)
     for name in sorted(names):
         header = arbitrary.getPropertyHeader(name)
-        if header.isArray() and header.getDataType().getPod() == Abc.POD.kFloat32POD \
-                and header.getDataType().getExtent() == 1:
+        if header.isArray() and str(header.getDataType()) == "float32_t":
+            # alembic3d's ISampleSelector(number) selects by time: sample i
+            # is asked for at its time.
             param = AbcGeom.IFloatGeomParam(arbitrary, name)
-            values = [list(param.getExpandedValue(Abc.ISampleSelector(i)).getVals())
-                      for i in range(param.getNumSamples())]
+            param_times = param.getTimeSampling()
+            values = [list(param.getExpandedValue(
+                Abc.ISampleSelector(param_times.getSampleTime(i))).getVals())
+                for i in range(param.getNumSamples())]
             totals["float_params"][name] = values
         if not param_is_constant(arbitrary, name):
             totals["varying"].add(name)
@@ -160,11 +163,15 @@ def check_curves(obj, file_name, failures, totals):
 def param_is_constant(arbitrary, name):
     """Whether every sample of a .arbGeomParams property is the same (then
     Alembic stores it once)."""
-    prop = arbitrary.getProperty(name)
-    if prop.isCompoundProperty():
-        prop = Abc.ICompoundProperty(arbitrary, name).getProperty(".vals")
-    return Abc.IArrayProperty(prop.getParent(), prop.getName()).isConstant() \
-        if prop.isArrayProperty() else Abc.IScalarProperty(prop.getParent(), prop.getName()).isConstant()
+    header = arbitrary.getPropertyHeader(name)
+    if header.isCompound():
+        values = Abc.ICompoundProperty(arbitrary, name)
+        if not values.getPropertyHeader(".vals"):
+            return True
+        return Abc.IArrayProperty(values, ".vals").isConstant()
+    if header.isArray():
+        return Abc.IArrayProperty(arbitrary, name).isConstant()
+    return Abc.IScalarProperty(arbitrary, name).isConstant()
 
 
 def int_values(arbitrary, name):
