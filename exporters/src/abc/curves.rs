@@ -241,7 +241,19 @@ impl CurvesExport {
         y_up.convert_to(groom.units, UpAxis::Y);
         let fixed = Self::fixed_properties(&mut archive, &y_up, animated_sampling)
             .map_err(io_error(path))?;
-        let (arbitrary, arbitrary_sources) = Self::arbitrary_properties(&y_up, animated_sampling);
+        let (mut arbitrary, mut arbitrary_sources) =
+            Self::arbitrary_properties(&y_up, animated_sampling);
+        // A static export has no frame to give values: its samples go in
+        // now, where they always have (the file's bytes stay the same).
+        if fps.is_none() {
+            for (property, source) in arbitrary.iter_mut().zip(&mut arbitrary_sources) {
+                if let Some(bytes) = source.first.take() {
+                    property
+                        .set_sample(&mut archive, &bytes)
+                        .map_err(io_error(path))?;
+                }
+            }
+        }
         Ok(CurvesExport {
             path: path.to_path_buf(),
             archive,
@@ -505,7 +517,9 @@ impl CurvesExport {
                 Some(bytes) => property
                     .set_sample(&mut self.archive, &bytes)
                     .map_err(io_error(&path))?,
-                None => property.repeat_previous(),
+                // (A static export's one sample went in at the start.)
+                None if self.samples > 0 => property.repeat_previous(),
+                None => {}
             }
         }
         self.samples += 1;
