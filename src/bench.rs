@@ -359,6 +359,7 @@ impl Delivery {
                 .write_frame(&groom::Frame {
                     time: self.frames as f64 / EXPORT_FPS,
                     points,
+                    attributes: Vec::new(),
                 })
                 .map_err(|e| BenchError::Input(e.to_string()))?;
         }

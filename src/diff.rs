@@ -412,6 +412,7 @@ mod tests {
             .map(|k| Frame {
                 time: k as f64 / 24.0,
                 points: g.points.clone(),
+                attributes: Vec::new(),
             })
             .collect();
         g

@@ -268,6 +268,25 @@ pub fn units_warning(path: &Path, units: Units) -> Option<String> {
     }
 }
 
+/// A warning for attributes that change over an animation (`names`, as
+/// [`Frame::attributes`] carries them) written to a format that cannot
+/// animate them: glTF animates positions only (morph targets hold
+/// positions, normals and tangents), so its frames hold the first frame's
+/// values. `None` for USD and Alembic, which sample them per frame.
+pub fn frame_attributes_warning<S: AsRef<str>>(path: &Path, names: &[S]) -> Option<String> {
+    let gltf = matches!(extension_of(path).as_str(), "gltf" | "glb");
+    if !gltf || names.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = names.iter().map(AsRef::as_ref).collect();
+    Some(format!(
+        "{}: glTF cannot animate vertex attributes: {} hold their first frame's values in every \
+         frame (write .usdc or .abc for them per frame, or convert one frame of those with --frame)",
+        path.display(),
+        names.join(", ")
+    ))
+}
+
 /// One line per kind of change writing `groom` (in `units`) to `path` must
 /// make to the data: units the file cannot keep, attributes the format
 /// cannot hold, curve types or a wrap it cannot write. Empty when the file
@@ -282,6 +301,10 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
             "{file}: .{extension} is read Y up by every reader and records no axis: written Y up, not {} up",
             groom.up_axis
         ));
+    }
+    if let Some(frame) = groom.frames.first() {
+        let names: Vec<&str> = frame.attributes.iter().map(|a| a.name.as_str()).collect();
+        warnings.extend(frame_attributes_warning(path, &names));
     }
     let dropped: Vec<&str> = groom
         .attributes

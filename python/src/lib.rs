@@ -319,6 +319,7 @@ impl PyGroom {
                 groom.frames.push(Frame {
                     time,
                     points: float_rows::<3>(&frames.get_item(k)?, &format!("frames[{k}]"))?,
+                    attributes: Vec::new(),
                 });
             }
         }

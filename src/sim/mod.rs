@@ -498,6 +498,11 @@ pub struct Environment<'a> {
     pub extra_acceleration: Option<&'a [[f32; 3]]>,
     /// The hold toward the groomed shape (hold.rs); `None`: off.
     pub hold: Option<Hold>,
+    /// Hydrogen bonds re-formed this step per vertex (one per vertex of
+    /// the strand set, a rate change in 0..1 added to the joint's hydrogen
+    /// rate): the drying hook, the water that evaporated this step
+    /// (`timeline::drying`). Added to the blower's (21), if any.
+    pub hydrogen_reform: Option<&'a [f32]>,
 }
 
 /// Why the solver cannot start or go on.

@@ -153,6 +153,7 @@ struct Context<'a> {
     extra_acceleration: Option<&'a [V3]>,
     /// The hold toward the groomed shape (hold.rs), when on.
     hold: Option<Hold>,
+    hydrogen_reform: Option<&'a [f32]>,
     hair_hair: Option<(f32, &'a EdgeGrid)>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
@@ -344,6 +345,15 @@ impl Solver {
                 )));
             }
         }
+        if let Some(reform) = environment.hydrogen_reform {
+            if reform.len() != strands.vertex_count() || reform.iter().any(|r| !r.is_finite()) {
+                return Err(SimError::Environment(format!(
+                    "hydrogen_reform needs {} finite values, has {}",
+                    strands.vertex_count(),
+                    reform.len()
+                )));
+            }
+        }
         let targets_nan = environment
             .bond_rate_targets
             .iter()
@@ -473,10 +483,12 @@ impl Solver {
             },
             bonds_still: environment.bond_rate_drive.iter().all(|r| *r * dt == 0.0)
                 && environment.bond_rate_targets.iter().all(Option::is_none)
-                && environment.blower.is_none(),
+                && environment.blower.is_none()
+                && environment.hydrogen_reform.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hold: environment.hold.filter(|h| h.strength > 0.0),
+            hydrogen_reform: environment.hydrogen_reform,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
             volume: volumetric,
             colliders: &prepared,
@@ -701,6 +713,9 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             blower_dv_here = work.blower[i];
         } else {
             work.db[i][0] = 0.0;
+        }
+        if let Some(reform) = ctx.hydrogen_reform {
+            work.db[i][0] += reform[s.first_vertex + i];
         }
         let control = s.controls[i];
         if control.targeted {

@@ -335,7 +335,15 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     let continues = groom.attribute(attribute_names::FRAME_XYZ).is_some();
     let parameters = parameters_of(timeline);
     parameters.check()?;
-    let sag_free = if timeline.file.solver.sag_free && !continues {
+    // The wind stage moves the hair without the rod solver: a timeline of
+    // wind stages only has no rest shape to balance.
+    let rod_solver = timeline
+        .file
+        .stages
+        .get_ref()
+        .iter()
+        .any(|s| *s.kind.get_ref() != StageKind::Wind);
+    let sag_free = if timeline.file.solver.sag_free && !continues && rod_solver {
         Some(strands.make_sag_free_checked(&parameters)?)
     } else {
         None
@@ -647,11 +655,17 @@ fn export_warnings_of(timeline: &Timeline, options: &BakeOptions, groom: &Groom)
     }
     (0..timeline.file.exports.len())
         .flat_map(|index| {
-            let path = output_path(options, timeline.file.exports[index].path.get_ref());
+            let e = &timeline.file.exports[index];
+            let path = output_path(options, e.path.get_ref());
             let destination = export_destination(timeline, index);
             let mut converted = groom.clone();
             converted.convert_to(destination.units, destination.up);
-            exporters::warnings(&path, &converted, destination.units)
+            let mut warnings = exporters::warnings(&path, &converted, destination.units);
+            if e.what == ExportWhat::Animated {
+                let names = super::frame_attributes::changing_in(timeline);
+                warnings.extend(exporters::frame_attributes_warning(&path, &names));
+            }
+            warnings
         })
         .collect()
 }
@@ -738,6 +752,8 @@ struct BakeRun<'a> {
     staged: Vec<PathBuf>,
     staging: Staging,
     animated: Vec<AnimatedExport>,
+    /// The attributes the stages change, written with every animated frame.
+    frame_attributes: Vec<&'static str>,
     /// Steps done over all stages.
     step_index: u64,
     snapshots: Vec<(String, Groom)>,
@@ -754,6 +770,8 @@ struct StageRun<'p> {
     rods: Option<PermRods>,
     wind: Option<WindPlan>,
     unrolled: bool,
+    /// Evaporation in a `dry` stage without `drying_time`.
+    drying: Option<super::drying::Drying>,
     /// Positions before the step, for the watchdog to put a strand back.
     before: Vec<[f32; 3]>,
     /// The strands the watchdog saw strained beyond `sim::WARN_STRAIN`.
@@ -853,6 +871,7 @@ impl<'a> BakeRun<'a> {
             create_parent(path)?;
             staged.push(staging.stage(path));
         }
+        let frame_attributes = super::frame_attributes::changing(&plans);
         let mut run = BakeRun {
             timeline,
             options,
@@ -872,6 +891,7 @@ impl<'a> BakeRun<'a> {
             staged,
             staging,
             animated: Vec::new(),
+            frame_attributes,
             step_index: 0,
             snapshots: Vec::new(),
             rods: Vec::new(),
@@ -930,6 +950,14 @@ impl<'a> BakeRun<'a> {
     /// Writes the animated frames due by the current step: frame k belongs
     /// to the step nearest k / fps.
     fn write_due_frames(&mut self) -> Result<(), BakeError> {
+        let due = |a: &AnimatedExport| {
+            a.frames_written < a.frame_count
+                && ((a.frames_written as f64 / a.fps) / self.dt).round() as u64 <= self.step_index
+        };
+        // The guides' pose with the attributes that change, once for all
+        // exports with a frame due.
+        let guides = (!self.frame_attributes.is_empty() && self.animated.iter().any(due))
+            .then(|| self.groom_now(false));
         for a in self.animated.iter_mut() {
             while a.frames_written < a.frame_count {
                 let k = a.frames_written;
@@ -941,9 +969,18 @@ impl<'a> BakeRun<'a> {
                     .delivery
                     .points(self.render.as_ref(), self.strands.positions());
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
+                let attributes = guides.as_ref().map_or_else(Vec::new, |g| {
+                    super::frame_attributes::delivered(
+                        &a.delivery,
+                        self.render.as_ref(),
+                        g,
+                        &self.frame_attributes,
+                    )
+                });
                 let frame = Frame {
                     time: k as f64 / a.fps,
                     points,
+                    attributes,
                 };
                 a.writer.write_frame(&frame)?;
                 a.frames_written += 1;
@@ -1162,6 +1199,20 @@ impl<'a> BakeRun<'a> {
             }
             _ => None,
         };
+        let drying = plan.drying.map(|air| {
+            let material = &timeline.file.material;
+            let radius = material
+                .radius
+                .as_ref()
+                .map_or(self.parameters.hair_radius, |r| *r.get_ref());
+            super::drying::Drying::new(
+                &air,
+                plan.blower,
+                f64::from(radius),
+                f64::from(*material.density.get_ref()),
+                self.dt,
+            )
+        });
         Ok(StageRun {
             plan,
             solver,
@@ -1170,6 +1221,7 @@ impl<'a> BakeRun<'a> {
             rods,
             wind,
             unrolled: false,
+            drying,
             before: Vec::new(),
             strain: sim::StrainWatch::default(),
         })
@@ -1220,9 +1272,15 @@ impl<'a> BakeRun<'a> {
                 stage.unrolled = true;
             }
         }
-        let (environment, wetness) = plan.environment_at(t_local);
+        let (mut environment, wetness) = plan.environment_at(t_local);
         if let Some((target, rate)) = wetness {
             drive_wetness(strands, target, rate, dt as f32);
+        }
+        if let Some(drying) = stage.drying.as_mut() {
+            let mut water = strands.wetness().to_vec();
+            drying.step(strands.positions(), &mut water);
+            strands.wetness_mut().copy_from_slice(&water);
+            environment.hydrogen_reform = Some(&drying.reform);
         }
         if let Some(wind) = stage.wind.as_mut() {
             if wind.advance_to(t_local + dt) {

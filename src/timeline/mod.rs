@@ -2,8 +2,11 @@
 //! (this module), the stages that drive the simulation ([`stages`]) and the
 //! bake that runs them and writes the exports ([`bake`]).
 
+mod applies;
 pub mod bake;
 pub mod hold;
+pub mod drying;
+pub mod frame_attributes;
 pub mod motion;
 pub mod outputs;
 pub mod render;
@@ -212,6 +215,7 @@ impl Timeline {
         if !(0.0..=1.0).contains(m.stiffness.get_ref()) {
             return fail(m.stiffness.span(), "stiffness must be in [0, 1]".into());
         }
+        applies::check_material(self)?;
         let positive = |v: f32| v.is_finite() && v > 0.0;
         if !positive(*m.youngs_modulus.get_ref()) {
             return fail(
@@ -555,6 +559,7 @@ impl Timeline {
         if let Some(w) = &stage.wetness {
             check_drive(self, w)?;
         }
+        applies::check_stage_keys(self, stage)?;
         let only = |present: bool, span: Range<usize>, what: &str, kinds: &[StageKind]| {
             if present && !kinds.contains(&kind) {
                 let names: Vec<_> = kinds.iter().map(|k| k.name()).collect();

@@ -417,6 +417,15 @@ pub struct BlowerSpec {
     /// Degrees; no wind outside the cone (default: none).
     #[serde(default)]
     pub cone_half_angle: Option<f32>,
+    /// Speed of the blower's air on its axis, m/s: with the falloff of
+    /// (19) it sets how fast the hair dries where the air reaches
+    /// (`timeline::drying`). Default 10 m/s, a hand-held dryer's.
+    #[serde(default)]
+    pub air_speed: Option<f64>,
+    /// Temperature of the blower's air on its axis, degrees Celsius.
+    /// Default 60 °C, a hand-held dryer's hot setting.
+    #[serde(default)]
+    pub air_temperature: Option<f64>,
 }
 
 fn default_falloff_length() -> f32 {
@@ -508,6 +517,15 @@ pub struct StageSpec {
     pub drying_time: Option<Spanned<f64>>,
     /// `dry`: a blower.
     pub blower: Option<Spanned<BlowerSpec>>,
+    /// `dry` (without `drying_time`): the room air's temperature, degrees
+    /// Celsius (default 20).
+    pub air_temperature: Option<Spanned<f64>>,
+    /// `dry` (without `drying_time`): the room air's speed past the hair,
+    /// m/s (default 0: still air).
+    pub air_speed: Option<Spanned<f64>>,
+    /// `dry` (without `drying_time`): the room air's relative humidity,
+    /// 0..1 (default 0.5).
+    pub humidity: Option<Spanned<f64>>,
     /// `perm`: the rods.
     pub rod: Option<Spanned<RodSpec>>,
     /// `wind`: the stochastic wind.

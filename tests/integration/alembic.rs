@@ -154,6 +154,7 @@ fn animated_export_reads_one_sample_per_frame_at_the_right_times() {
                     ]
                 })
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let options = exporters::AnimationOptions {

@@ -20,6 +20,7 @@ fn animated_groom(strands: usize) -> Groom {
                 .iter()
                 .map(|p| [p[0] + k as f32 * 0.5, p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     groom

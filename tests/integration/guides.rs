@@ -79,8 +79,6 @@ seed = 3
 [groom]
 generate = {{ layout = "scalp", strands = {guides}, length = 0.12, segment_length = 0.03, scalp_angle = 60.0, drape = 8.0 }}
 {render}
-[solver]
-quaternion_mass_scale = 0.1
 [[stage]]
 kind = "settle"
 duration = 0.1
@@ -403,8 +401,6 @@ seed = 1
 [groom]
 generate = {{ layout = "scalp", strands = 100, length = 0.21, segment_length = 0.03, scalp_angle = 95.0, drape = 10.0 }}
 render = {{ count = 10000, seed = 1 }}
-[solver]
-quaternion_mass_scale = 0.1
 [[stage]]
 kind = "settle"
 duration = {duration}
@@ -598,6 +594,7 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                 .enumerate()
                 .map(|(i, p)| [p[0] + 0.01 * k as f32, p[1], p[2] - 0.001 * (i % 5) as f32])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let (source_guides, source_render) = roles(&animated);

@@ -141,6 +141,7 @@ fn inspect_json_counts_the_frames_of_animated_files() {
             let frame = groom::Frame {
                 time: index as f64 / 24.0,
                 points,
+                attributes: Vec::new(),
             };
             writer.write_frame(&frame).unwrap();
         }

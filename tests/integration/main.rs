@@ -25,4 +25,5 @@ mod refusals;
 mod roundtrip;
 mod samples;
 mod studio;
+mod treatments;
 mod usd;

@@ -52,6 +52,7 @@ pub(crate) fn animated_swatch(dir: &TestDir) -> String {
                 .iter()
                 .map(|p| [p[0] + 0.03 * f as f32 * -p[1], p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let path = dir.path("swing.glb");

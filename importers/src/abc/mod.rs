@@ -287,6 +287,7 @@ mod tests {
             .map(|&time| Frame {
                 time,
                 points: groom.points.clone(),
+                attributes: Vec::new(),
             })
             .collect();
         groom
@@ -413,6 +414,7 @@ mod tests {
                     .iter()
                     .map(|p| [p[0] + i as f32, p[1], p[2] - 0.5 * i as f32])
                     .collect(),
+                attributes: Vec::new(),
             };
             writer.write_frame(&frame).unwrap();
             frames.push(frame);
@@ -523,6 +525,7 @@ mod tests {
                     .iter()
                     .map(|p| [p[0], p[1] + i as f32, p[2]])
                     .collect(),
+                attributes: Vec::new(),
             })
             .collect();
         for bytes in [

@@ -127,6 +127,9 @@ struct Part {
     times: Vec<f64>,
     basis: CurveBasis,
     attributes: Vec<Attribute>,
+    /// `.arbGeomParams` whose samples change with `P`'s: each one's value
+    /// at every sample (as a bake writes its bond rates and wetness).
+    frame_attributes: Vec<Vec<Attribute>>,
 }
 
 struct SceneReader<'r, 'a> {
@@ -421,6 +424,7 @@ impl SceneReader<'_, '_> {
             times,
             basis,
             attributes: Vec::new(),
+            frame_attributes: Vec::new(),
         };
         let vertex_count = total as usize;
         for property in &geom.children {
@@ -430,7 +434,7 @@ impl SceneReader<'_, '_> {
                 _ => continue,
             };
             if let Some(attribute) =
-                self.geom_param(property, &name, vertex_count, part.counts.len())?
+                self.geom_param(property, &name, vertex_count, part.counts.len(), 0)?
             {
                 part.attributes.push(attribute);
             }
@@ -439,8 +443,33 @@ impl SceneReader<'_, '_> {
             for property in &arbitrary.children {
                 let name = property.name.clone();
                 if let Some(attribute) =
-                    self.geom_param(property, &name, vertex_count, part.counts.len())?
+                    self.geom_param(property, &name, vertex_count, part.counts.len(), 0)?
                 {
+                    // Sampled with `P` and not the same throughout: a value
+                    // per frame.
+                    if animated
+                        && property.kind != Kind::Compound
+                        && property.sample_count == sample_count
+                    {
+                        let mut values = vec![attribute.clone()];
+                        for index in 1..sample_count {
+                            let at = self.geom_param(
+                                property,
+                                &name,
+                                vertex_count,
+                                part.counts.len(),
+                                index,
+                            )?;
+                            match at {
+                                Some(a) if a.scope == attribute.scope => values.push(a),
+                                _ => break,
+                            }
+                        }
+                        let complete = values.len() == sample_count as usize;
+                        if complete && values.iter().any(|v| v.values != attribute.values) {
+                            part.frame_attributes.push(values);
+                        }
+                    }
                     part.attributes.push(attribute);
                 }
             }
@@ -518,6 +547,7 @@ impl SceneReader<'_, '_> {
         name: &str,
         vertex_count: usize,
         curve_count: usize,
+        index: u32,
     ) -> Result<Option<Attribute>, Fault> {
         let (values_property, indices) = match property.kind {
             Kind::Compound => match property.child(".vals") {
@@ -562,7 +592,7 @@ impl SceneReader<'_, '_> {
             ));
             return Ok(None);
         }
-        let mut values = self.sample_values(values_property, 0)?;
+        let mut values = self.sample_values(values_property, index)?;
         if let Some(indices) = indices {
             let groups = values.len() / extent;
             let mut expanded = Vec::with_capacity(indices.len().saturating_mul(extent));
@@ -702,7 +732,11 @@ fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
                 .unwrap_or_default();
             points.extend_from_slice(sample);
         }
-        groom.frames.push(Frame { time, points });
+        groom.frames.push(Frame {
+            time,
+            points,
+            attributes: Vec::new(),
+        });
     }
     for attribute in &first.attributes {
         let mut merged = attribute.clone();
@@ -723,8 +757,55 @@ fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
         }
         groom.set_attribute(merged);
     }
+    frame_attributes(&parts, &mut groom);
     one_attribute_per_meaning(&mut groom);
     Ok(groom)
+}
+
+/// Each frame's values of the attributes some object samples per frame
+/// (objects that hold one still give it to every frame), for the
+/// attributes the groom kept (those every object has).
+fn frame_attributes(parts: &[Part], groom: &mut Groom) {
+    let mut names: Vec<&str> = Vec::new();
+    for part in parts {
+        for values in &part.frame_attributes {
+            if let Some(first) = values.first() {
+                if !names.contains(&first.name.as_str()) {
+                    names.push(&first.name);
+                }
+            }
+        }
+    }
+    names.retain(|name| groom.attribute(name).is_some());
+    for (index, frame) in groom.frames.iter_mut().enumerate() {
+        for &name in &names {
+            let Some(kept) = groom.attributes.iter().find(|a| a.name == name) else {
+                continue;
+            };
+            let mut merged = Attribute {
+                name: name.to_string(),
+                scope: kept.scope,
+                values: match kept.values {
+                    AttributeValues::Float(_) => AttributeValues::Float(Vec::new()),
+                    AttributeValues::Vec2(_) => AttributeValues::Vec2(Vec::new()),
+                    AttributeValues::Vec3(_) => AttributeValues::Vec3(Vec::new()),
+                    AttributeValues::Int(_) => AttributeValues::Int(Vec::new()),
+                },
+            };
+            for part in parts {
+                let sampled = part
+                    .frame_attributes
+                    .iter()
+                    .find(|v| v.first().is_some_and(|a| a.name == name))
+                    .and_then(|v| v.get(index).or_else(|| v.last()));
+                let value = sampled.or_else(|| part.attributes.iter().find(|a| a.name == name));
+                if let Some(value) = value {
+                    append(&mut merged.values, &value.values);
+                }
+            }
+            frame.attributes.push(merged);
+        }
+    }
 }
 
 /// Unreal's `groom_width` and `groom_root_uv` say what the schema's `width`

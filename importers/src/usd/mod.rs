@@ -10,6 +10,7 @@
 mod compose;
 mod crate_reader;
 mod primvars;
+mod frame_primvars;
 mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
@@ -28,6 +29,7 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     let mut groom = to_groom(path, &stage)?;
+    frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
 }
@@ -45,6 +47,7 @@ pub fn read_sequence_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Groom>, Impo
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     if !topology_is_sampled(&stage) {
         let mut groom = to_groom(path, &stage)?;
+        frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
         groom.provenance.format = "usd".into();
         return Ok(vec![groom]);
     }
@@ -109,6 +112,7 @@ fn topology_sequence(path: &Path, stage: &Stage) -> Result<Vec<Groom>, ImportErr
         let frame = Frame {
             time: code / codes_per_second,
             points: std::mem::take(&mut groom.points),
+            attributes: Vec::new(),
         };
         match grooms.last_mut() {
             Some(run) if run.strand_vertex_counts == groom.strand_vertex_counts => {
@@ -988,6 +992,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             .map(|&code| Frame {
                 time: code / codes_per_second,
                 points: Vec::new(),
+                attributes: Vec::new(),
             })
             .collect();
     }

@@ -224,6 +224,7 @@ fn animated_groom(frames: usize) -> Groom {
         groom.frames.push(Frame {
             time: i as f64 / 24.0,
             points,
+            attributes: Vec::new(),
         });
     }
     groom
