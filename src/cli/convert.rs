@@ -1,6 +1,6 @@
 //! `groombake convert IN OUT [--units U] [--up y|z] [--frame F]`.
 
-use super::BadInput;
+use super::{values, BadInput};
 use clap::Args;
 use groom::{Units, UpAxis};
 use std::path::PathBuf;
@@ -8,22 +8,24 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
     /// The groom to read.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     input: PathBuf,
     /// The file to write; its extension picks the format.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     output: PathBuf,
     /// Units of the output (m, cm, mm, in, or metres per unit); default: the
     /// format's (glTF m; USD the input's; .abc, .hair, .data, .obj cm).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     units: Option<Units>,
     /// Up axis of the output; default: the input's.
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     up: Option<UpAxis>,
     /// Units the input is in, for formats that do not record them (.hair,
     /// .data, .obj: cm by default; .abc: by the writing application).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     source_units: Option<Units>,
     /// Up axis the input uses, for formats that do not say (default y).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     source_up: Option<UpAxis>,
     /// Write only this frame (0-based) of an animated input, as a static groom.
     #[arg(long)]

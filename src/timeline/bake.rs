@@ -59,6 +59,8 @@ pub struct BakeMonitor {
     pub steps_done: std::sync::atomic::AtomicU64,
     /// Known once the bake is prepared (0 before).
     pub steps_total: std::sync::atomic::AtomicU64,
+    /// Index of the stage running (or last run) in the timeline's stages.
+    pub stage: AtomicUsize,
     /// 0 while the bake may run. A signal handler stores the signal's
     /// number ([`BakeError::Interrupted`]); [`BakeMonitor::cancel`] stores
     /// [`BakeMonitor::CANCELLED`] ([`BakeError::Cancelled`]). The bake stops
@@ -150,6 +152,16 @@ impl BakeError {
     }
 }
 
+/// The likely cause of strands blowing up, and what to do: the words
+/// `docs/tuning.md` ("Troubleshooting") explains.
+fn blowup_remedy(colliders: bool) -> &'static str {
+    if colliders {
+        "likely cause: a collider inside the hair's roots (move it off the scalp; `groombake inspect MESH` prints a mesh's bounds) or a step too large (lower [solver] dt, e.g. \"1/720\")"
+    } else {
+        "likely cause: a step too large for the stage's forces (lower [solver] dt, e.g. \"1/720\")"
+    }
+}
+
 /// Everything a bake starts from, prepared (and so checked) before any step.
 pub struct Prepared {
     /// The simulated strands (the guides, when there is render hair).
@@ -162,6 +174,8 @@ pub struct Prepared {
     pub seed: u64,
     /// What the sag-free start did (`None`: off, or a continued bake).
     pub sag_free: Option<sim::SagFreeReport>,
+    /// The fibre radii the strands use, and where they came from.
+    pub fibre_radius: super::fibre::FibreRadius,
 }
 
 /// The material of the timeline in the solver's terms.
@@ -352,6 +366,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         ));
     }
     check_preview_color(timeline, &groom)?;
+    let fibre_radius = super::fibre::fibre_radius(timeline, &groom, strands.radii());
     Ok(Prepared {
         groom,
         render,
@@ -360,6 +375,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         parameters,
         seed,
         sag_free,
+        fibre_radius,
     })
 }
 
@@ -772,6 +788,7 @@ impl<'a> BakeRun<'a> {
             parameters,
             seed,
             sag_free,
+            fibre_radius,
         } = prepare(timeline, options.seed)?;
         let export_warnings = export_warnings(timeline, options, &groom);
         if let (true, Some(first)) = (options.strict, export_warnings.first()) {
@@ -802,6 +819,8 @@ impl<'a> BakeRun<'a> {
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
+        report.warnings.extend(fibre_radius.warning());
+        report.fibre_radius = Some(fibre_radius);
         if let Some(warning) = sag_free.as_ref().and_then(sim::SagFreeReport::warning) {
             report.warnings.push(warning);
         }
@@ -1031,6 +1050,9 @@ impl<'a> BakeRun<'a> {
             steps,
             ..StageReport::default()
         };
+        if let Some(monitor) = &self.options.monitor {
+            monitor.stage.store(stage_index, Ordering::Relaxed);
+        }
         let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
             self.options.interrupted()?;
@@ -1069,11 +1091,12 @@ impl<'a> BakeRun<'a> {
         }
         if let Some(first) = stage_report.watchdog.first() {
             stage_report.warnings.push(format!(
-                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {})",
+                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {}); {}",
                 stage_report.watchdog.len(),
                 first.strand,
                 first.step,
-                first.reason
+                first.reason,
+                blowup_remedy(!stage.colliders.is_empty())
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();

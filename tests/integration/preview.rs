@@ -121,9 +121,9 @@ fn sheet_of_frames_coloured_by_an_attribute() {
         "bond_hydrogen",
     ]);
     let (width, height, pixels) = decode(&dir.path("sheet.png"));
-    // Two pictures side by side, with a label strip above them.
-    assert!(width > 400 && width < 420, "{width}");
-    assert!(height > 150 && height < 190, "{height}");
+    // --size is the whole picture: two pictures side by side under
+    // their labels share it.
+    assert_eq!((width, height), (200, 150));
     // Both ends of the ramp appear (the strands and the legend).
     let red = pixels
         .chunks_exact(3)
