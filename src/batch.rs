@@ -598,7 +598,8 @@ pub fn write_merged(manifest: &Manifest, report: &BatchReport) -> std::io::Resul
     let path = manifest.out.join(MERGED_REPORT);
     write_json(&path, report)?;
     let mut html = groom::AtomicFile::create(&path.with_extension("html"))?;
-    std::io::Write::write_all(&mut html, crate::report_html::batch_page(report).as_bytes())?;
+    let page = crate::report_html::batch_page(report, &manifest.out);
+    std::io::Write::write_all(&mut html, page.as_bytes())?;
     html.commit()?;
     Ok(path)
 }

@@ -88,8 +88,8 @@ pub struct ReportUnusable(String);
 
 pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     let mut report = BakeReport::start(&args.timeline);
-    let (mut sheet, mut snapshots) = (None, Vec::new());
-    let result = bake_and_report(&args, &mut report, &mut sheet, &mut snapshots);
+    let (mut sheet, mut samples) = (None, Vec::new());
+    let result = bake_and_report(&args, &mut report, &mut sheet, &mut samples);
     let Some(path) = &args.report else {
         return result;
     };
@@ -115,7 +115,11 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     let written = if is_stdout(path) {
         print_report(&report)
     } else if wants_html(Some(path)) {
-        let page = groombake::report_html::bake_page(&report, &snapshots, sheet.as_deref());
+        let folder = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        let page = groombake::report_html::bake_page(&report, &samples, sheet.as_deref(), folder);
         groom::AtomicFile::create(path).and_then(|mut file| {
             std::io::Write::write_all(&mut file, page.as_bytes())?;
             file.commit()
@@ -150,7 +154,7 @@ fn bake_and_report(
     args: &BakeArgs,
     report: &mut BakeReport,
     html: &mut Option<Vec<u8>>,
-    snapshots: &mut Vec<(String, groom::Groom)>,
+    samples: &mut Vec<groombake::timeline::plots::PlotSample>,
 ) -> anyhow::Result<()> {
     let monitor = Arc::new(BakeMonitor::default());
     stop_on_signals(&monitor.stop)?;
@@ -170,7 +174,7 @@ fn bake_and_report(
     let outcome = bake(&timeline, &options).map_err(classify)?;
     if wants_html(args.report.as_deref()) {
         *html = Some(sheet_png(&timeline, &outcome.snapshots, &outcome.rods)?);
-        *snapshots = outcome.snapshots;
+        *samples = outcome.plot_samples;
     }
     let started = std::mem::take(&mut report.started);
     *report = outcome.report;

@@ -96,6 +96,8 @@ pub struct BakeOutcome {
     pub rods: Vec<super::surfaces::RodSnapshot>,
     /// The plastic rest shape at the end (as the `rest` export writes it).
     pub rest: Groom,
+    /// Bond rates, wetness and strain sampled every frame (the report's plots).
+    pub plot_samples: Vec<super::plots::PlotSample>,
 }
 
 /// Why a bake failed.
@@ -755,6 +757,7 @@ struct BakeRun<'a> {
     snapshots: Vec<(String, Groom)>,
     rods: Vec<super::surfaces::RodSnapshot>,
     report: BakeReport,
+    plots: super::plots::Plotter,
 }
 
 /// What one stage runs with: its solver and colliders, rods and wind.
@@ -851,6 +854,7 @@ impl<'a> BakeRun<'a> {
             create_parent(path)?;
             staged.push(staging.stage(path));
         }
+        let plots = super::plots::Plotter::new(&strands);
         let mut run = BakeRun {
             timeline,
             options,
@@ -874,6 +878,7 @@ impl<'a> BakeRun<'a> {
             snapshots: Vec::new(),
             rods: Vec::new(),
             report,
+            plots,
         };
         if !removed.is_empty() {
             run.report.warnings.push(format!(
@@ -1070,6 +1075,7 @@ impl<'a> BakeRun<'a> {
                 });
             }
             self.step_index += 1;
+            self.plots.after_step(t_end, &self.strands);
             if let Some(monitor) = &self.options.monitor {
                 monitor.steps_done.store(self.step_index, Ordering::Relaxed);
             }
@@ -1082,6 +1088,9 @@ impl<'a> BakeRun<'a> {
                 with_frames_from_positions(&self.groom, &self.strands, &material_of(timeline))?;
         }
         self.snapshot(format!("after {}", stage_report.name));
+        stage_report.set_kept = self
+            .plots
+            .stage_end(global_time + steps as f64 * dt, &self.strands);
         let non_finite = stage_report.contained_strands.len() - stage_report.watchdog.len();
         if non_finite > 0 {
             stage_report.warnings.push(format!(
@@ -1285,6 +1294,7 @@ impl<'a> BakeRun<'a> {
             snapshots: self.snapshots,
             rods: self.rods,
             rest,
+            plot_samples: self.plots.samples,
         })
     }
 }

@@ -54,7 +54,9 @@ pub fn fibre_radius(
 
 /// Metres as micrometres or millimetres, whichever reads better.
 fn length(metres: f32) -> String {
-    if metres < 1e-3 {
+    if metres < 1e-5 {
+        format!("{:.2} um", metres * 1e6)
+    } else if metres < 1e-3 {
         format!("{:.0} um", metres * 1e6)
     } else {
         format!("{:.1} mm", metres * 1e3)

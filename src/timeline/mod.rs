@@ -6,6 +6,7 @@ pub mod bake;
 pub mod fibre;
 pub mod motion;
 pub mod outputs;
+pub mod plots;
 pub mod render;
 pub mod report;
 pub mod schema;

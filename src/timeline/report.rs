@@ -23,6 +23,12 @@ pub struct StageReport {
     pub contained_strands: Vec<usize>,
     /// Strands the physical sanity watchdog contained, with why.
     pub watchdog: Vec<WatchdogReport>,
+    /// After this stage, the share of the largest shape change so far
+    /// (the pose against the groom at the start) that the rest shape
+    /// keeps: 0 the hair would spring back to its groomed shape if released
+    /// now, 1 it keeps the whole change; `null` while the pose has not
+    /// changed (see `timeline::plots`).
+    pub set_kept: Option<f64>,
     pub warnings: Vec<String>,
 }
 

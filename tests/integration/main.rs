@@ -22,6 +22,7 @@ mod inspect;
 mod install;
 mod preview;
 mod refusals;
+mod reports;
 mod roundtrip;
 mod samples;
 mod usd;
