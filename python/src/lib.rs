@@ -645,17 +645,11 @@ fn bake(
                 .unwrap_or_else(|| s.kind.get_ref().name().into())
         })
         .collect();
-    let stage_of = |m: &BakeMonitor| {
-        let index = m.stage.load(Ordering::Relaxed);
-        stage_names.get(index).cloned().unwrap_or_default()
-    };
-    let with_stage = progress.as_ref().is_some_and(takes_stage);
-    let report_progress = |callback: &Bound<'_, PyAny>, fraction: f64, stage: String| {
-        if with_stage {
-            callback.call1((fraction, stage)).map(drop)
-        } else {
-            callback.call1((fraction,)).map(drop)
-        }
+    let mut reporter = Progress {
+        with_stage: progress.as_ref().is_some_and(takes_stage),
+        names: stage_names,
+        next_stage: 0,
+        last: -1.0,
     };
     let fraction = |m: &BakeMonitor| {
         let total = m.steps_total.load(Ordering::Relaxed);
@@ -668,7 +662,6 @@ fn bake(
     let outcome = std::thread::scope(|scope| -> PyResult<_> {
         let worker = scope.spawn(|| run_bake(engine_timeline, &options));
         let mut interrupted: Option<PyErr> = None;
-        let mut last = (-1.0f64, usize::MAX);
         while !worker.is_finished() {
             // Wait without the GIL; then, holding it, report and check Ctrl-C.
             py.detach(|| std::thread::sleep(Duration::from_millis(50)));
@@ -680,14 +673,11 @@ fn bake(
                 interrupted = Some(e);
                 continue;
             }
-            let now = (fraction(&monitor), monitor.stage.load(Ordering::Relaxed));
             if let Some(callback) = &progress {
-                if now.0 > last.0 || (with_stage && now.1 != last.1) {
-                    last = now;
-                    if let Err(e) = report_progress(callback, now.0, stage_of(&monitor)) {
-                        monitor.cancel();
-                        interrupted = Some(e);
-                    }
+                let stage = monitor.stage.load(Ordering::Relaxed);
+                if let Err(e) = reporter.update(callback, fraction(&monitor), stage) {
+                    monitor.cancel();
+                    interrupted = Some(e);
                 }
             }
         }
@@ -702,11 +692,48 @@ fn bake(
     let mut report = outcome.map_err(engine_bake_error)?.report;
     report.finish_ok(engine_timeline);
     if let Some(callback) = &progress {
-        report_progress(callback, 1.0, stage_of(&monitor))?;
+        let last = reporter.names.len().saturating_sub(1);
+        reporter.update(callback, 1.0, last)?;
     }
     let value = serde_json::to_value(&report).map_err(|e| BakeError::new_err(e.to_string()))?;
     let data = to_python(py, &value)?.cast_into::<PyDict>()?.unbind();
     Ok(PyReport { data })
+}
+
+/// Calls a progress callback: once for every stage as it starts (also a
+/// stage shorter than the 50 ms between polls, with the fraction of the
+/// moment), and whenever the fraction grew.
+struct Progress {
+    /// `callback(fraction, stage)`, else `callback(fraction)`.
+    with_stage: bool,
+    names: Vec<String>,
+    /// The first stage not yet reported.
+    next_stage: usize,
+    last: f64,
+}
+
+impl Progress {
+    fn update(&mut self, callback: &Bound<'_, PyAny>, fraction: f64, stage: usize) -> PyResult<()> {
+        let stage = stage.min(self.names.len().saturating_sub(1));
+        if self.with_stage {
+            while self.next_stage <= stage && self.next_stage < self.names.len() {
+                let name = self.names[self.next_stage].clone();
+                callback.call1((fraction, name))?;
+                self.next_stage += 1;
+                self.last = fraction;
+            }
+        }
+        if fraction > self.last {
+            self.last = fraction;
+            if self.with_stage {
+                let name = self.names.get(stage).cloned().unwrap_or_default();
+                callback.call1((fraction, name))?;
+            } else {
+                callback.call1((fraction,))?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Whether a progress callback takes the stage too: its signature binds
