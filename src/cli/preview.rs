@@ -1,5 +1,5 @@
 //! `groombake preview FILE -o OUT.png [--frame F | --frames a,b,c] [--color ATTR]
-//! [--size WxH] [--view front|side|top|persp] [--rest]`.
+//! [--size WxH | --panel-size WxH] [--view front|side|top|persp] [--rest]`.
 
 use super::{values, BadInput};
 use clap::Args;
@@ -27,6 +27,10 @@ pub struct PreviewArgs {
     /// a sheet's pictures and labels share it.
     #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
     size: (u32, u32),
+    /// Size of each picture of a sheet instead, WIDTHxHEIGHT: the sheet
+    /// grows with their count (labels and gutters added).
+    #[arg(long, value_parser = parse_size, conflicts_with = "size", value_name = "WxH")]
+    panel_size: Option<(u32, u32)>,
     /// Where the camera looks from (Y up): front, side, top or persp. Default:
     /// a timeline's `[preview] view`, else the axis view that shows most of
     /// the change (a timeline, an animated file) or of the groom (a still one).
@@ -81,8 +85,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         None => preview::view_showing_spread(&groom),
     });
     let options = PreviewOptions {
-        width: args.size.0,
-        height: args.size.1,
+        width: args.panel_size.unwrap_or(args.size).0,
+        height: args.panel_size.unwrap_or(args.size).1,
         view,
         frame: args.frame,
         color_by: args.color.clone(),
@@ -103,11 +107,24 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
                 surfaces: &[],
             })
             .collect();
-        preview::render_sheet_within(&entries, &options)
+        sheet(&args, &entries, &options)
     }
     .map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
+}
+
+/// A sheet of `--size` in all, or of pictures of `--panel-size` each.
+fn sheet(
+    args: &PreviewArgs,
+    entries: &[SheetEntry],
+    options: &groombake::preview::PreviewOptions,
+) -> Result<groombake::preview::Image, PreviewError> {
+    if args.panel_size.is_some() {
+        preview::render_sheet(entries, options)
+    } else {
+        preview::render_sheet_within(entries, options)
+    }
 }
 
 /// The rest shape of a `state` export: the state rebuilt (metres, Y up) and
@@ -163,8 +180,7 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
     };
     let outcome = bake(&timeline, &options).map_err(super::bake::classify)?;
     let mut preview_options = sheet_options(&timeline, &outcome.snapshots);
-    preview_options.width = args.size.0;
-    preview_options.height = args.size.1;
+    (preview_options.width, preview_options.height) = args.panel_size.unwrap_or(args.size);
     if let Some(view) = args.view {
         preview_options.view = view;
     }
@@ -204,8 +220,8 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
             surfaces,
         })
         .collect();
-    let image = preview::render_sheet_within(&entries, &preview_options)
-        .map_err(|error| explain(&args.file, error))?;
+    let image =
+        sheet(args, &entries, &preview_options).map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
 }
