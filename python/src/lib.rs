@@ -526,8 +526,9 @@ fn to_python<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<
 }
 
 /// What a bake did (the content of `groombake bake --report`): its keys
-/// are attributes (`report.stages`, `report.outputs`, `report.warnings`,
-/// ...); `to_dict()` gives all of it.
+/// are attributes (`report.status`, `report.finished`, `report.stages`,
+/// `report.outputs`, `report.warnings`, ...), listed by `dir()`;
+/// `to_dict()` gives all of it.
 #[pyclass(name = "Report", module = "groombake")]
 pub struct PyReport {
     data: Py<PyDict>,
@@ -540,6 +541,20 @@ impl PyReport {
             .bind(py)
             .get_item(name)?
             .ok_or_else(|| pyo3::exceptions::PyAttributeError::new_err(name.to_string()))
+    }
+
+    /// The report's keys beside the class's attributes, so that `dir()`
+    /// and completion in an interactive shell show them.
+    fn __dir__(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
+        let py = slf.py();
+        let object = py.import("builtins")?.getattr("object")?;
+        let mut names: Vec<String> = object.call_method1("__dir__", (slf,))?.extract()?;
+        for key in slf.borrow().data.bind(py).keys() {
+            names.push(key.extract()?);
+        }
+        names.sort();
+        names.dedup();
+        Ok(names)
     }
 
     /// The whole report as a dict.
@@ -577,12 +592,16 @@ impl PyReport {
 /// threads: worker threads (default: one per core); outputs are
 /// byte-identical for any count. seed: overrides the timeline's seed.
 /// progress: called with the fraction done (0.0 to 1.0, never
-/// decreasing), about 20 times a second and at the end.
+/// decreasing) and the name of the stage running (`progress(fraction,
+/// stage)`; a callable of one argument gets the fraction only), about 20
+/// times a second, when a stage starts and at the end.
 ///
 /// The GIL is released while baking: other Python threads run. Ctrl-C
 /// (KeyboardInterrupt) stops the bake after its current step and leaves
-/// no half-written file. Returns a Report; raises BadInput for bad input
-/// and BakeError for a failure during the bake.
+/// no half-written file. Returns a finished Report (`status` "ok",
+/// `finished`, `outputs`, `sources`, as `groombake bake --report` writes
+/// it); raises BadInput for bad input and BakeError for a failure during
+/// the bake.
 #[pyfunction]
 #[pyo3(signature = (timeline, out=None, threads=None, seed=None, progress=None))]
 fn bake(
@@ -616,6 +635,23 @@ fn bake(
         monitor: Some(monitor.clone()),
         ..BakeOptions::default()
     };
+    let stage_names: Vec<String> = engine_timeline
+        .file
+        .stages
+        .get_ref()
+        .iter()
+        .map(|s| {
+            s.name
+                .clone()
+                .unwrap_or_else(|| s.kind.get_ref().name().into())
+        })
+        .collect();
+    let mut reporter = Progress {
+        with_stage: progress.as_ref().is_some_and(takes_stage),
+        names: stage_names,
+        next_stage: 0,
+        last: -1.0,
+    };
     let fraction = |m: &BakeMonitor| {
         let total = m.steps_total.load(Ordering::Relaxed);
         if total == 0 {
@@ -627,7 +663,6 @@ fn bake(
     let outcome = std::thread::scope(|scope| -> PyResult<_> {
         let worker = scope.spawn(|| run_bake(engine_timeline, &options));
         let mut interrupted: Option<PyErr> = None;
-        let mut last = -1.0f64;
         while !worker.is_finished() {
             // Wait without the GIL; then, holding it, report and check Ctrl-C.
             py.detach(|| std::thread::sleep(Duration::from_millis(50)));
@@ -639,14 +674,11 @@ fn bake(
                 interrupted = Some(e);
                 continue;
             }
-            let now = fraction(&monitor);
             if let Some(callback) = &progress {
-                if now > last {
-                    last = now;
-                    if let Err(e) = callback.call1((now,)) {
-                        monitor.cancel();
-                        interrupted = Some(e);
-                    }
+                let stage = monitor.stage.load(Ordering::Relaxed);
+                if let Err(e) = reporter.update(callback, fraction(&monitor), stage) {
+                    monitor.cancel();
+                    interrupted = Some(e);
                 }
             }
         }
@@ -658,13 +690,62 @@ fn bake(
         }
         Ok(result)
     })?;
-    let report = outcome.map_err(engine_bake_error)?.report;
+    let mut report = outcome.map_err(engine_bake_error)?.report;
+    report.finish_ok(engine_timeline);
     if let Some(callback) = &progress {
-        callback.call1((1.0f64,))?;
+        let last = reporter.names.len().saturating_sub(1);
+        reporter.update(callback, 1.0, last)?;
     }
     let value = serde_json::to_value(&report).map_err(|e| BakeError::new_err(e.to_string()))?;
     let data = to_python(py, &value)?.cast_into::<PyDict>()?.unbind();
     Ok(PyReport { data })
+}
+
+/// Calls a progress callback: once for every stage as it starts (also a
+/// stage shorter than the 50 ms between polls, with the fraction of the
+/// moment), and whenever the fraction grew.
+struct Progress {
+    /// `callback(fraction, stage)`, else `callback(fraction)`.
+    with_stage: bool,
+    names: Vec<String>,
+    /// The first stage not yet reported.
+    next_stage: usize,
+    last: f64,
+}
+
+impl Progress {
+    fn update(&mut self, callback: &Bound<'_, PyAny>, fraction: f64, stage: usize) -> PyResult<()> {
+        let stage = stage.min(self.names.len().saturating_sub(1));
+        if self.with_stage {
+            while self.next_stage <= stage && self.next_stage < self.names.len() {
+                let name = self.names[self.next_stage].clone();
+                callback.call1((fraction, name))?;
+                self.next_stage += 1;
+                self.last = fraction;
+            }
+        }
+        if fraction > self.last {
+            self.last = fraction;
+            if self.with_stage {
+                let name = self.names.get(stage).cloned().unwrap_or_default();
+                callback.call1((fraction, name))?;
+            } else {
+                callback.call1((fraction,))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether a progress callback takes the stage too: its signature binds
+/// two arguments. One without a signature Python can read gets the
+/// fraction only, as before the stage was passed.
+fn takes_stage(callback: &Bound<'_, PyAny>) -> bool {
+    let py = callback.py();
+    py.import("inspect")
+        .and_then(|inspect| inspect.call_method1("signature", (callback,)))
+        .and_then(|signature| signature.call_method1("bind", (0.0f64, "")))
+        .is_ok()
 }
 
 /// groombake: bakes styled hair grooms from the chemistry of hair.

@@ -34,7 +34,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 32)]
     vertices: usize,
     /// Worker threads (default: all cores; at most 1024).
-    #[arg(long, value_parser = super::bake::parse_threads)]
+    #[arg(short = 'j', long, value_parser = super::bake::parse_threads)]
     threads: Option<usize>,
     /// Elastic model: `physical` (real hair, direct solve) or `paper`.
     #[arg(long, default_value = "physical", value_parser = ["physical", "paper"])]

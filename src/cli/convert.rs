@@ -1,6 +1,6 @@
 //! `groombake convert IN OUT [--target T | --units U --up y|z] [--frame F]`.
 
-use super::BadInput;
+use super::{values, BadInput};
 use clap::Args;
 use groom::{Units, UpAxis};
 use std::path::PathBuf;
@@ -8,8 +8,10 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
     /// The groom to read.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     input: PathBuf,
     /// The file to write; its extension picks the format.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     output: PathBuf,
     /// The program the output is for (unreal, maya, houdini, blender, usd):
     /// a preset of units, up axis and attribute names (docs/formats.md);
@@ -19,18 +21,18 @@ pub struct ConvertArgs {
     /// Units of the output (m, cm, mm, in, or metres per unit); default: the
     /// target's, else the format's (glTF, .abc, .obj m; USD the input's;
     /// .hair, .data cm).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     units: Option<Units>,
     /// Up axis of the output; default: the target's, else Y (USD: the
     /// input's).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     up: Option<UpAxis>,
     /// Units the input is in, for formats that do not record them (.hair,
     /// .data, .obj: cm by default; .abc: by the writing application).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     source_units: Option<Units>,
     /// Up axis the input uses, for formats that do not say (default y).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     source_up: Option<UpAxis>,
     /// Write only this frame (0-based) of an animated input, as a static groom.
     #[arg(long)]

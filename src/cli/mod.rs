@@ -10,6 +10,7 @@ mod generate;
 mod inspect;
 mod install;
 mod preview;
+mod values;
 
 use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
@@ -18,7 +19,9 @@ use std::process::ExitCode;
 #[command(
     name = "groombake",
     version,
-    about = "Bakes styled hair grooms from the chemistry of hair"
+    about = "Bakes styled hair grooms from the chemistry of hair",
+    // A bare `groombake` shows the commands, not one line.
+    arg_required_else_help = true
 )]
 pub struct Args {
     #[command(subcommand)]
@@ -62,14 +65,19 @@ pub struct BadInput(pub String);
 pub struct Interrupted(pub usize);
 
 /// Parses the command line; on `--help`/`--version` prints clap's text and
-/// returns 0; on a usage error prints one line, `groombake: <where>:
-/// <what>` (the subcommand and argument, and clap's first line), and
-/// returns 2.
+/// returns 0; with no arguments prints the help (the command list) and
+/// returns 2; on a usage error prints one line, `groombake: <where>:
+/// <what>` (the subcommand and argument, clap's message with the names of
+/// missing arguments and its "a similar ... exists" tip), and returns 2.
 pub fn parse() -> Result<Args, ExitCode> {
     Args::try_parse().map_err(|error| {
         if !error.use_stderr() {
             let _ = error.print();
             return ExitCode::SUCCESS;
+        }
+        if error.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+            let _ = error.print();
+            return ExitCode::from(2);
         }
         eprintln!("groombake: {}", printable(&usage_error_line(&error)));
         ExitCode::from(2)
@@ -80,13 +88,25 @@ pub fn parse() -> Result<Args, ExitCode> {
 fn usage_error_line(error: &clap::Error) -> String {
     use clap::error::{ContextKind, ContextValue};
     let rendered = error.render().to_string();
-    let what = rendered
-        .lines()
-        .find(|l| !l.trim().is_empty())
-        .unwrap_or("bad usage")
-        .trim_start_matches("error:")
-        .trim()
-        .to_string();
+    // clap's message up to its usage lines: the error, then the missing
+    // arguments' names and a tip, each on lines of their own.
+    let mut what = String::new();
+    for line in rendered.lines().map(str::trim) {
+        if line.starts_with("Usage:") || line.starts_with("For more information") {
+            break;
+        }
+        let line = line.trim_start_matches("error:").trim();
+        if line.is_empty() {
+            continue;
+        }
+        if !what.is_empty() {
+            what.push_str(if line.starts_with("tip:") { "; " } else { " " });
+        }
+        what.push_str(line);
+    }
+    if what.is_empty() {
+        what.push_str("bad usage");
+    }
     let subcommand = std::env::args()
         .nth(1)
         .filter(|a| Args::command().find_subcommand(a).is_some());

@@ -59,6 +59,8 @@ pub struct BakeMonitor {
     pub steps_done: std::sync::atomic::AtomicU64,
     /// Known once the bake is prepared (0 before).
     pub steps_total: std::sync::atomic::AtomicU64,
+    /// Index of the stage running (or last run) in the timeline's stages.
+    pub stage: AtomicUsize,
     /// 0 while the bake may run. A signal handler stores the signal's
     /// number ([`BakeError::Interrupted`]); [`BakeMonitor::cancel`] stores
     /// [`BakeMonitor::CANCELLED`] ([`BakeError::Cancelled`]). The bake stops
@@ -94,6 +96,8 @@ pub struct BakeOutcome {
     pub rods: Vec<super::surfaces::RodSnapshot>,
     /// The plastic rest shape at the end (as the `rest` export writes it).
     pub rest: Groom,
+    /// Bond rates, wetness and strain sampled every frame (the report's plots).
+    pub plot_samples: Vec<super::plots::PlotSample>,
 }
 
 /// Why a bake failed.
@@ -150,6 +154,16 @@ impl BakeError {
     }
 }
 
+/// The likely cause of strands blowing up, and what to do: the words
+/// `docs/tuning.md` ("Troubleshooting") explains.
+fn blowup_remedy(colliders: bool) -> &'static str {
+    if colliders {
+        "likely cause: a collider inside the hair's roots (move it off the scalp; `groombake inspect MESH` prints a mesh's bounds) or a step too large (lower [solver] dt, e.g. \"1/720\")"
+    } else {
+        "likely cause: a step too large for the stage's forces (lower [solver] dt, e.g. \"1/720\")"
+    }
+}
+
 /// Everything a bake starts from, prepared (and so checked) before any step.
 pub struct Prepared {
     /// The simulated strands (the guides, when there is render hair).
@@ -162,6 +176,8 @@ pub struct Prepared {
     pub seed: u64,
     /// What the sag-free start did (`None`: off, or a continued bake).
     pub sag_free: Option<sim::SagFreeReport>,
+    /// The fibre radii the strands use, and where they came from.
+    pub fibre_radius: super::fibre::FibreRadius,
 }
 
 /// The material of the timeline in the solver's terms.
@@ -360,6 +376,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         ));
     }
     check_preview_color(timeline, &groom)?;
+    let fibre_radius = super::fibre::fibre_radius(timeline, &groom, strands.radii());
     Ok(Prepared {
         groom,
         render,
@@ -368,6 +385,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         parameters,
         seed,
         sag_free,
+        fibre_radius,
     })
 }
 
@@ -759,6 +777,7 @@ struct BakeRun<'a> {
     snapshots: Vec<(String, Groom)>,
     rods: Vec<super::surfaces::RodSnapshot>,
     report: BakeReport,
+    plots: super::plots::Plotter,
 }
 
 /// What one stage runs with: its solver and colliders, rods and wind.
@@ -796,6 +815,7 @@ impl<'a> BakeRun<'a> {
             parameters,
             seed,
             sag_free,
+            fibre_radius,
         } = prepare(timeline, options.seed)?;
         // What the reader left out of the source, then what the exports
         // must change.
@@ -841,6 +861,8 @@ impl<'a> BakeRun<'a> {
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
+        report.warnings.extend(fibre_radius.warning());
+        report.fibre_radius = Some(fibre_radius);
         if let Some(warning) = sag_free.as_ref().and_then(sim::SagFreeReport::warning) {
             report.warnings.push(warning);
         }
@@ -872,6 +894,7 @@ impl<'a> BakeRun<'a> {
             staged.push(staging.stage(path));
         }
         let frame_attributes = super::frame_attributes::changing(&plans);
+        let plots = super::plots::Plotter::new(&strands);
         let mut run = BakeRun {
             timeline,
             options,
@@ -896,6 +919,7 @@ impl<'a> BakeRun<'a> {
             snapshots: Vec::new(),
             rods: Vec::new(),
             report,
+            plots,
         };
         if !removed.is_empty() {
             run.report.warnings.push(format!(
@@ -1092,6 +1116,9 @@ impl<'a> BakeRun<'a> {
             steps,
             ..StageReport::default()
         };
+        if let Some(monitor) = &self.options.monitor {
+            monitor.stage.store(stage_index, Ordering::Relaxed);
+        }
         let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
             self.options.interrupted()?;
@@ -1109,6 +1136,7 @@ impl<'a> BakeRun<'a> {
                 });
             }
             self.step_index += 1;
+            self.plots.after_step(t_end, &self.strands);
             if let Some(monitor) = &self.options.monitor {
                 monitor.steps_done.store(self.step_index, Ordering::Relaxed);
             }
@@ -1124,6 +1152,9 @@ impl<'a> BakeRun<'a> {
             self.strands.keep_groomed_of(&old);
         }
         self.snapshot(format!("after {}", stage_report.name));
+        stage_report.set_kept = self
+            .plots
+            .stage_end(global_time + steps as f64 * dt, &self.strands);
         let non_finite = stage_report.contained_strands.len() - stage_report.watchdog.len();
         if non_finite > 0 {
             stage_report.warnings.push(format!(
@@ -1136,11 +1167,12 @@ impl<'a> BakeRun<'a> {
         }
         if let Some(first) = stage_report.watchdog.first() {
             stage_report.warnings.push(format!(
-                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {})",
+                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {}); {}",
                 stage_report.watchdog.len(),
                 first.strand,
                 first.step,
-                first.reason
+                first.reason,
+                blowup_remedy(!stage.colliders.is_empty())
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();
@@ -1353,6 +1385,7 @@ impl<'a> BakeRun<'a> {
             snapshots: self.snapshots,
             rods: self.rods,
             rest,
+            plot_samples: self.plots.samples,
         })
     }
 }

@@ -7,13 +7,18 @@ pub mod bake;
 pub mod hold;
 pub mod drying;
 pub mod frame_attributes;
+pub mod fibre;
 pub mod motion;
 pub mod outputs;
+pub mod plots;
 pub mod render;
 pub mod report;
 pub mod schema;
 pub mod stages;
 pub mod surfaces;
+
+/// Perm rod radii, metres: the range `docs/tuning.md` documents.
+pub const ROD_RADIUS: std::ops::RangeInclusive<f32> = 0.005..=0.05;
 
 use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
 use serde_spanned::Spanned;
@@ -635,6 +640,19 @@ impl Timeline {
                 && phases_ok)
             {
                 return fail(r.span(), "rod needs a positive radius, root_gap >= 0, disulfide_cut in [0, 1], increasing phases in (0, 1] and a non-zero axis".into());
+            }
+            // The documented range (docs/tuning.md): real perm rods. A
+            // thinner rod bends edges further than a step can follow.
+            if !ROD_RADIUS.contains(&v.radius) {
+                return fail(
+                    r.span(),
+                    format!(
+                        "rod radius {} m: outside the documented {} - {} m (perm rods are 5 mm to 5 cm)",
+                        v.radius,
+                        ROD_RADIUS.start(),
+                        ROD_RADIUS.end()
+                    ),
+                );
             }
         }
         match (&stage.wind, kind) {
