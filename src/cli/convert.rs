@@ -36,6 +36,9 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     super::check_output_path(&args.output)?;
+    // Temporaries of killed converts to the same file (a kill or a signal
+    // leaves `.NAME.PID.tmp`): removed as a bake removes its own.
+    groombake::timeline::outputs::remove_stale_temporaries(std::slice::from_ref(&args.output));
     let mut grooms = super::read_sequence(&args.input)?;
     for groom in &mut grooms {
         if let Some(units) = args.source_units {
@@ -65,7 +68,8 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| exporters::default_units(&args.output, groom.units));
     let up = args.up.unwrap_or(groom.up_axis);
     groom.convert_to(units, up);
-    let warnings = exporters::warnings(&args.output, &groom, units);
+    let mut warnings = exporters::warnings(&args.output, &groom, units);
+    warnings.extend(exporters::order_and_pose_warnings(&args.output, &groom));
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write(&args.output, &groom)?;
     Ok(())

@@ -160,7 +160,8 @@ pub struct Prepared {
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
     pub seed: u64,
-    /// What the sag-free start did (`None`: off, or a continued bake).
+    /// What the sag-free start did (`None`: off, or a continued bake);
+    /// its `unstable` strands are found by the bake's probe, not here.
     pub sag_free: Option<sim::SagFreeReport>,
 }
 
@@ -303,12 +304,37 @@ pub(crate) fn shape_of(
                 .iter()
                 .map(|v| Vector::new(v[0] * scale, v[1] * scale, v[2] * scale))
                 .collect();
+            check_mesh_coordinates(&vertices).map_err(|message| BakeError::Input {
+                file: file.clone(),
+                message,
+            })?;
             SharedShape::trimesh(vertices, triangles).map_err(|e| BakeError::Input {
                 file,
                 message: format!("not a usable collider mesh: {e}"),
             })?
         }
     })
+}
+
+/// Refuses a collider vertex (after the mesh's scale) outside the scene's
+/// range, [`crate::budget::MAX_COORDINATE`]: its grid would be one cell
+/// holding the whole mesh, and f32 positions there cannot resolve a hair.
+fn check_mesh_coordinates(vertices: &[sim::parry3d::math::Vector]) -> Result<(), String> {
+    for (i, v) in vertices.iter().enumerate() {
+        for (c, axis) in ["x", "y", "z"].into_iter().enumerate() {
+            // Written so that NaN is outside too.
+            let inside = f64::from(v[c]).abs() <= crate::budget::MAX_COORDINATE;
+            if !inside {
+                return Err(format!(
+                    "vertex {i} has {axis} = {:e} m (after `scale`): outside \
+                     -{max:e} to {max:e} m",
+                    v[c],
+                    max = crate::budget::MAX_COORDINATE
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
@@ -321,7 +347,9 @@ pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
 }
 
 /// Imports the groom, builds the strands and colliders. Everything that can
-/// be wrong with the inputs shows here, before the first step.
+/// be wrong with the inputs shows here, before the first step; nothing is
+/// simulated (`validate` runs this), so the sag-free stability probe is
+/// left to the bake.
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
     let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
     let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
@@ -335,8 +363,10 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     let continues = groom.attribute(attribute_names::FRAME_XYZ).is_some();
     let parameters = parameters_of(timeline);
     parameters.check()?;
+    // The stability probe simulates: the bake runs it (`probe_sag_free`),
+    // not this preparation that `validate` shares.
     let sag_free = if timeline.file.solver.sag_free && !continues {
-        Some(strands.make_sag_free_checked(&parameters)?)
+        Some(strands.make_sag_free(parameters.gravity))
     } else {
         None
     };
@@ -344,12 +374,16 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
         let pose = pose_of(pose_at(c.motion.get_ref(), 0.0));
-        colliders.insert(Collider::new(
-            c.name.get_ref().clone(),
-            shape,
-            pose,
-            *c.friction.get_ref(),
-        ));
+        let collider =
+            Collider::checked(c.name.get_ref().clone(), shape, pose, *c.friction.get_ref())
+                .map_err(|message| match c.shape.get_ref() {
+                    ShapeSpec::Mesh { path, .. } => BakeError::Input {
+                        file: timeline.resolve(path),
+                        message,
+                    },
+                    _ => BakeError::Timeline(timeline.error_at(c.shape.span(), message)),
+                })?;
+        colliders.insert(collider);
     }
     check_preview_color(timeline, &groom)?;
     Ok(Prepared {
@@ -771,8 +805,11 @@ impl<'a> BakeRun<'a> {
             colliders,
             parameters,
             seed,
-            sag_free,
+            mut sag_free,
         } = prepare(timeline, options.seed)?;
+        if let Some(sag_free) = &mut sag_free {
+            strands.probe_sag_free(&parameters, sag_free)?;
+        }
         let export_warnings = export_warnings(timeline, options, &groom);
         if let (true, Some(first)) = (options.strict, export_warnings.first()) {
             return Err(BakeError::Input {

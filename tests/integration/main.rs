@@ -18,6 +18,7 @@ mod guides;
 mod hardening;
 mod inspect;
 mod install;
+mod limits;
 mod preview;
 mod refusals;
 mod roundtrip;
