@@ -23,7 +23,7 @@ use serde_spanned::Spanned;
 use slurm::SlurmSettings;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// The report every job leaves in its folder.
@@ -117,6 +117,8 @@ pub enum JobStatus {
     Failed,
     /// No report found (a merge of shards that did not all run).
     Missing,
+    /// Stopped by a signal while it ran, or never started because of one.
+    Interrupted,
 }
 
 /// The report of one job (also the entry of the merged report).
@@ -170,6 +172,21 @@ pub struct BatchOptions {
     pub resume: bool,
     /// Worker threads of each bake (overrides the manifest's).
     pub threads: Option<usize>,
+    /// A request to stop, shared with the CLI's signal handlers: 0 while
+    /// the batch may run, else the signal's number. Running bakes stop at
+    /// their next step (removing their temporaries), no further job
+    /// starts, and every job not finished is reported `interrupted`.
+    pub stop: Option<Arc<AtomicUsize>>,
+}
+
+impl BatchOptions {
+    /// The signal that asked the batch to stop, if one did.
+    pub fn stopped_by(&self) -> Option<usize> {
+        self.stop
+            .as_ref()
+            .map(|s| s.load(Ordering::Relaxed))
+            .filter(|&s| s != 0)
+    }
 }
 
 fn manifest_error(
@@ -209,9 +226,17 @@ impl Manifest {
     /// Reads a manifest and expands its globs; every job's timeline and
     /// groom must exist and names must be unique.
     pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            manifest_error(path, "", 0..0, format!("cannot read the manifest: {e}"))
-        })?;
+        let read = |message: String| {
+            manifest_error(
+                path,
+                "",
+                0..0,
+                format!("cannot read the manifest: {message}"),
+            )
+        };
+        let bytes = importers::read_limited(path, crate::budget::MAX_TIMELINE_BYTES)
+            .map_err(|e| read(e.to_string()))?;
+        let text = String::from_utf8(bytes).map_err(|e| read(format!("not UTF-8 text ({e})")))?;
         let file: ManifestFile = toml::from_str(&text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             manifest_error(path, &text, span, e.message().trim().to_string())
@@ -417,11 +442,18 @@ fn bake_job(
     job: &Job,
     timeline: &Timeline,
     threads: Option<usize>,
+    stop: Option<&Arc<AtomicUsize>>,
 ) -> Result<(serde_json::Value, Vec<JobOutput>), String> {
     let options = BakeOptions {
         out_dir: job.folder.clone(),
         threads,
         seed: job.seed,
+        monitor: stop.map(|stop| {
+            Arc::new(crate::timeline::bake::BakeMonitor {
+                stop: stop.clone(),
+                ..Default::default()
+            })
+        }),
         ..BakeOptions::default()
     };
     let mut report = bake(timeline, &options).map_err(|e| e.to_string())?.report;
@@ -489,11 +521,14 @@ pub fn run_job(job: &Job, options: &BatchOptions, threads: Option<usize>) -> Job
         std::fs::create_dir_all(&job.folder)
             .map_err(|e| format!("{}: {e}", job.folder.display()))?;
         // A panic in one bake must not end the others.
-        std::panic::catch_unwind(|| bake_job(job, &timeline, threads))
+        std::panic::catch_unwind(|| bake_job(job, &timeline, threads, options.stop.as_ref()))
             .unwrap_or_else(|_| Err("the bake panicked".into()))
     });
     let (status, error, bake, outputs) = match outcome {
         Ok((bake, outputs)) => (JobStatus::Ok, None, Some(bake), outputs),
+        Err(message) if options.stopped_by().is_some() => {
+            (JobStatus::Interrupted, Some(message), None, Vec::new())
+        }
         Err(message) => (JobStatus::Failed, Some(message), None, Vec::new()),
     };
     let mut report = JobReport {
@@ -536,6 +571,9 @@ pub fn run(
     std::thread::scope(|scope| {
         for _ in 0..parallel {
             scope.spawn(|| loop {
+                if options.stopped_by().is_some() {
+                    break;
+                }
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&index) = selected.get(k) else { break };
                 let report = run_job(&manifest.jobs[index], options, Some(threads));
@@ -546,12 +584,38 @@ pub fn run(
             });
         }
     });
-    reports
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-        .collect()
+    let slots = reports.into_inner().unwrap_or_default();
+    match options.stopped_by() {
+        // Every selected job is in the report: those a signal kept from
+        // starting too.
+        Some(signal) => slots
+            .into_iter()
+            .zip(&selected)
+            .map(|(slot, &index)| {
+                slot.unwrap_or_else(|| not_started(&manifest.jobs[index], signal))
+            })
+            .collect(),
+        None => slots.into_iter().flatten().collect(),
+    }
+}
+
+/// The report of a job a signal kept from starting.
+fn not_started(job: &Job, signal: usize) -> JobReport {
+    JobReport {
+        name: job.name.clone(),
+        timeline: job.timeline.display().to_string(),
+        groom: job.groom.as_ref().map(|g| g.display().to_string()),
+        folder: job.folder.display().to_string(),
+        status: JobStatus::Interrupted,
+        error: Some(format!(
+            "not started: the batch was stopped by signal {signal}"
+        )),
+        wall_seconds: 0.0,
+        outputs: Vec::new(),
+        bake: None,
+        inputs: None,
+        rebaked_because: None,
+    }
 }
 
 /// The merged report of every job of the manifest: the reports of this
@@ -585,7 +649,7 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
         manifest: manifest.path.display().to_string(),
         groombake_version: env!("CARGO_PKG_VERSION").to_string(),
         succeeded: count(JobStatus::Ok) + count(JobStatus::Skipped),
-        failed: count(JobStatus::Failed),
+        failed: count(JobStatus::Failed) + count(JobStatus::Interrupted),
         missing: count(JobStatus::Missing),
         jobs,
         wall_seconds,
@@ -596,6 +660,11 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
 /// beside it the same as an HTML page ([`MERGED_REPORT`] with `.html`).
 pub fn write_merged(manifest: &Manifest, report: &BatchReport) -> std::io::Result<PathBuf> {
     let path = manifest.out.join(MERGED_REPORT);
+    // Temporaries of killed batches writing these reports go first.
+    crate::timeline::outputs::remove_stale_temporaries(&[
+        path.clone(),
+        path.with_extension("html"),
+    ]);
     write_json(&path, report)?;
     let mut html = groom::AtomicFile::create(&path.with_extension("html"))?;
     let page = crate::report_html::batch_page(report, &manifest.out);

@@ -40,7 +40,7 @@ const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:24px;color:#
 h1{font-size:22px}h2{font-size:17px;margin-top:28px}\
 table{border-collapse:collapse;background:#fff}td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:middle}\
 th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums}code{font-size:12px}\
-.ok{color:#176f2c;font-weight:600}.skipped{color:#2458a6;font-weight:600}.failed,.missing{color:#b00020;font-weight:600}\
+.ok{color:#176f2c;font-weight:600}.skipped{color:#2458a6;font-weight:600}.failed,.missing,.interrupted{color:#b00020;font-weight:600}\
 .plots{display:flex;flex-wrap:wrap;gap:16px}svg{background:#fff;border:1px solid #ccc}img.sheet{max-width:100%;border:1px solid #ccc}";
 
 fn page(title: &str, body: &str) -> String {
@@ -362,6 +362,7 @@ pub fn batch_page(report: &BatchReport, page_dir: &Path) -> String {
             JobStatus::Skipped => "skipped",
             JobStatus::Failed => "failed",
             JobStatus::Missing => "missing",
+            JobStatus::Interrupted => "interrupted",
         };
         let error = job
             .error

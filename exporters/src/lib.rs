@@ -357,6 +357,41 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
     warnings
 }
 
+/// What a format changes about strand order or the base pose of a groom
+/// read from a file (`convert`), said rather than done silently: USD and
+/// glTF write guides before render strands (one prim or primitive each),
+/// and Alembic stores the frames only, so a base pose that is not frame 0
+/// (an animated USD's default `points`) is lost.
+pub fn order_and_pose_warnings(path: &Path, groom: &Groom) -> Vec<String> {
+    let extension = extension_of(path);
+    let file = path.display();
+    let mut warnings = Vec::new();
+    let splits_guides = matches!(extension.as_str(), "usda" | "usdc" | "usd" | "gltf" | "glb");
+    if let (true, Some(guide)) = (splits_guides, groom.attribute(groom::guides::GROOM_GUIDE)) {
+        if let (Scope::Strand, AttributeValues::Int(flags)) = (guide.scope, &guide.values) {
+            let guide_after_render = flags.iter().skip_while(|&&f| f != 0).any(|&f| f != 0);
+            if guide_after_render {
+                warnings.push(format!(
+                    "{file}: guides and render strands (groom_guide) are interleaved: \
+                     .{extension} writes the guides first, so the strands are reordered"
+                ));
+            }
+        }
+    }
+    if extension == "abc" {
+        if let Some(first) = groom.frames.first() {
+            if first.points != groom.points {
+                warnings.push(format!(
+                    "{file}: the base pose differs from frame 0 (at {} s): .abc stores the \
+                     frames only, so the base pose is dropped",
+                    first.time
+                ));
+            }
+        }
+    }
+    warnings
+}
+
 fn extension_of(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())

@@ -128,12 +128,21 @@ fn attribute_values(value: &Bound<'_, PyAny>, name: &str) -> PyResult<AttributeV
     let ndim: usize = array.getattr("ndim")?.extract()?;
     let what = format!("attribute {name}");
     match (kind.as_str(), ndim) {
-        ("i" | "u" | "b", 1) => {
-            let ints = as_array(&array, "int32")?;
+        ("i" | "b", 1) => {
+            // Through int64 and a checked narrowing: numpy's own cast to
+            // int32 wraps (2**40 would become 0).
+            let ints = as_array(&array, "int64")?;
             let ints = ints
-                .cast::<PyArray1<i32>>()
+                .cast::<PyArray1<i64>>()
                 .map_err(|e| bad_input(format!("{what}: {e}")))?;
-            Ok(AttributeValues::Int(ints.to_vec()?))
+            Ok(AttributeValues::Int(int32_values(ints.to_vec()?, &what)?))
+        }
+        ("u", 1) => {
+            let ints = as_array(&array, "uint64")?;
+            let ints = ints
+                .cast::<PyArray1<u64>>()
+                .map_err(|e| bad_input(format!("{what}: {e}")))?;
+            Ok(AttributeValues::Int(int32_values(ints.to_vec()?, &what)?))
         }
         (_, 1) => {
             let floats = as_array(&array, "float32")?;
@@ -155,6 +164,68 @@ fn attribute_values(value: &Bound<'_, PyAny>, name: &str) -> PyResult<AttributeV
         _ => Err(bad_input(format!(
             "{what}: expected a 1- or 2-dimensional array"
         ))),
+    }
+}
+
+/// Integer attribute values as the groom stores them (int32), refusing
+/// one out of range instead of wrapping it.
+fn int32_values<T>(values: Vec<T>, what: &str) -> PyResult<Vec<i32>>
+where
+    T: Copy + std::fmt::Display,
+    i32: TryFrom<T>,
+{
+    values
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            i32::try_from(v).map_err(|_| {
+                bad_input(format!(
+                    "{what}[{i}]: {v} is outside the int32 range of integer attributes \
+                     ({} to {})",
+                    i32::MIN,
+                    i32::MAX
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Refuses frame times an export would refuse: not finite, negative, or
+/// not increasing by at least [`groombake::budget::MIN_DT`] (closer times
+/// share one USD time code or one f32 glTF key).
+fn check_times(times: &[f64]) -> PyResult<()> {
+    for (k, &time) in times.iter().enumerate() {
+        if !(time.is_finite() && time >= 0.0) {
+            return Err(bad_input(format!(
+                "times[{k}]: {time} is not a non-negative number of seconds"
+            )));
+        }
+        if k > 0 {
+            let last = times[k - 1];
+            if !(time - last >= groombake::budget::MIN_DT && (time as f32) > (last as f32)) {
+                return Err(bad_input(format!(
+                    "times[{k}]: {time} s does not follow {last} s by at least {} s",
+                    groombake::budget::MIN_DT
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses points no format can store: finite as f32 in centimetres (the
+/// largest scale a writer applies, Alembic's).
+fn check_storable(points: &[[f32; 3]], meters_per_unit: f64, what: &str) -> PyResult<()> {
+    let scale = meters_per_unit / groom::Units::CENTIMETERS.meters_per_unit;
+    match points.iter().position(|p| {
+        !p.iter()
+            .all(|&c| ((f64::from(c) * scale) as f32).is_finite())
+    }) {
+        Some(i) => Err(bad_input(format!(
+            "{what}[{i}]: {:?} is not finite in centimetres, as Alembic stores it",
+            points[i]
+        ))),
+        None => Ok(()),
     }
 }
 
@@ -300,6 +371,10 @@ impl PyGroom {
         groom.units = parse_units(Some(units))?.unwrap_or_default();
         groom.up_axis = parse_up(Some(up))?.unwrap_or_default();
         groom.provenance.format = "python".into();
+        if let Some(times) = &times {
+            check_times(times)?;
+        }
+        check_storable(&groom.points, groom.units.meters_per_unit, "points")?;
         if let Some(frames) = frames {
             let frames = as_array(frames, "float32")?;
             let shape: Vec<usize> = frames.getattr("shape")?.extract()?;
@@ -316,9 +391,12 @@ impl PyGroom {
                     })?,
                     None => k as f64 / 24.0,
                 };
+                let what = format!("frames[{k}]");
+                let points = float_rows::<3>(&frames.get_item(k)?, &what)?;
+                check_storable(&points, groom.units.meters_per_unit, &what)?;
                 groom.frames.push(Frame {
                     time,
-                    points: float_rows::<3>(&frames.get_item(k)?, &format!("frames[{k}]"))?,
+                    points,
                     attributes: Vec::new(),
                 });
             }
@@ -608,13 +686,26 @@ fn bake(
     py: Python<'_>,
     timeline: &Bound<'_, PyAny>,
     out: Option<PathBuf>,
-    threads: Option<usize>,
+    threads: Option<Bound<'_, PyAny>>,
     seed: Option<u64>,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<PyReport> {
-    if threads == Some(0) {
-        return Err(bad_input("threads must be at least 1"));
-    }
+    // The CLI's cap: a million threads would run for minutes.
+    let threads = threads
+        .map(|t| {
+            t.extract::<i64>()
+                .ok()
+                .and_then(|t| usize::try_from(t).ok())
+                .ok_or(())
+                .and_then(|t| groombake::budget::check_threads(t).map_err(|_| ()))
+                .map_err(|()| {
+                    bad_input(format!(
+                        "threads must be 1 to {}",
+                        groombake::budget::MAX_THREADS
+                    ))
+                })
+        })
+        .transpose()?;
     let loaded;
     let timeline_ref = match timeline.cast::<PyTimeline>() {
         Ok(t) => t.borrow(),

@@ -68,7 +68,7 @@ pub fn classify(error: BakeError) -> anyhow::Error {
 /// SIGINT, SIGTERM and SIGHUP store their number in `stop` (the bake's
 /// [`BakeMonitor::stop`]) so the bake stops at its next step and removes
 /// its temporaries; a second such signal ends the process at once.
-fn stop_on_signals(stop: &Arc<AtomicUsize>) -> anyhow::Result<()> {
+pub(super) fn stop_on_signals(stop: &Arc<AtomicUsize>) -> anyhow::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     for number in [SIGINT, SIGTERM, SIGHUP] {
         let stop_now = Arc::new(std::sync::atomic::AtomicBool::new(false));
@@ -198,7 +198,7 @@ fn bake_and_report(
         }
     }
     for warning in &report.warnings {
-        eprintln!("warning: {warning}");
+        eprintln!("warning: {}", super::shortened(&super::printable(warning)));
     }
     Ok(())
 }
@@ -224,7 +224,7 @@ pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {
         .into_iter()
         .chain(prepared.fibre_radius.warning())
     {
-        eprintln!("warning: {warning}");
+        eprintln!("warning: {}", super::shortened(&super::printable(&warning)));
     }
     let unsimulated = groombake::sim::unsimulated_strands(&prepared.strands);
     if let Some(first) = unsimulated.first() {

@@ -94,12 +94,18 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let mut reports = Vec::new();
+    let mut interrupted = None;
     if !args.merge {
+        // A signal stops the running bakes (their temporaries removed) and
+        // the batch still writes its report, each job's state in it.
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        super::bake::stop_on_signals(&stop)?;
         let options = BatchOptions {
             parallel: args.jobs,
             shard: args.shard,
             resume: args.resume,
             threads: args.threads,
+            stop: Some(stop),
         };
         let total = manifest.shard(args.shard).len();
         let done = std::sync::atomic::AtomicUsize::new(0);
@@ -111,7 +117,7 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
                 let error = report
                     .error
                     .as_deref()
-                    .map(|e| format!(": {e}"))
+                    .map(|e| format!(": {}", super::shortened(&super::printable(e))))
                     .unwrap_or_default();
                 let why = report
                     .rebaked_because
@@ -125,6 +131,10 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
             }
         };
         reports = batch::run(&manifest, &options, &finished);
+        interrupted = options.stopped_by();
+        if let (Some(signal), Some(_)) = (interrupted, args.shard) {
+            return Err(super::Interrupted(signal).into());
+        }
         if args.shard.is_some() {
             // The other shards may still run: the merge comes later.
             let failed = reports
@@ -145,6 +155,9 @@ pub fn run(args: BatchArgs) -> anyhow::Result<()> {
     let merged = batch::merge(&manifest, &reports, started.elapsed().as_secs_f64());
     let path = batch::write_merged(&manifest, &merged)
         .map_err(|e| anyhow::anyhow!("{}: {e}", manifest.out.display()))?;
+    if let Some(signal) = interrupted {
+        return Err(super::Interrupted(signal).into());
+    }
     if !args.quiet {
         eprintln!(
             "{} of {} job(s) succeeded; report {}",

@@ -45,6 +45,9 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     super::check_output_path(&args.output)?;
+    // Temporaries of killed converts to the same file (a kill or a signal
+    // leaves `.NAME.PID.tmp`): removed as a bake removes its own.
+    groombake::timeline::outputs::remove_stale_temporaries(std::slice::from_ref(&args.output));
     let mut grooms = super::read_sequence(&args.input)?;
     // What the reader left out, before anything is written.
     super::warn_or_refuse(&super::losses(&args.input, &grooms), args.strict)?;
@@ -73,7 +76,8 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     warn_of_dropped_frames(&args, &groom);
     let destination = destination_of(&args, &groom);
     groom.convert_to(destination.units, destination.up);
-    let warnings = exporters::warnings(&args.output, &groom, destination.units);
+    let mut warnings = exporters::warnings(&args.output, &groom, destination.units);
+    warnings.extend(exporters::order_and_pose_warnings(&args.output, &groom));
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write_as(&args.output, &groom, destination.attributes)?;
     print_written(&args.output, &groom);

@@ -79,7 +79,10 @@ pub fn parse() -> Result<Args, ExitCode> {
             let _ = error.print();
             return ExitCode::from(2);
         }
-        eprintln!("groombake: {}", printable(&usage_error_line(&error)));
+        eprintln!(
+            "groombake: {}",
+            shortened(&printable(&usage_error_line(&error)))
+        );
         ExitCode::from(2)
     })
 }
@@ -137,6 +140,45 @@ pub fn printable(text: &str) -> String {
     out
 }
 
+/// The longest error or warning line, in characters (after `groombake: `).
+pub const MAX_LINE: usize = 300;
+/// A word (a run without spaces: a token, a path) longer than this many
+/// characters is shown by its two ends and its length.
+const MAX_WORD: usize = 120;
+/// Characters kept from each end of a shortened word.
+const WORD_ENDS: usize = 40;
+
+/// A line of at most [`MAX_LINE`] characters: each word over [`MAX_WORD`]
+/// (a 1 MB token from a file) becomes its two ends and its length in
+/// bytes, and a line still too long keeps its start and end.
+pub fn shortened(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4 * MAX_LINE));
+    for (i, word) in text.split(' ').enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        let count = word.chars().count();
+        if count > MAX_WORD {
+            let head: String = word.chars().take(WORD_ENDS).collect();
+            let tail: String = word.chars().skip(count - WORD_ENDS).collect();
+            // The length of the token itself, without the quotes around it.
+            let token = word.trim_matches(|c| matches!(c, '\'' | '"' | '`'));
+            out.push_str(&format!("{head}...{tail} ({} bytes)", token.len()));
+        } else {
+            out.push_str(word);
+        }
+    }
+    let count = out.chars().count();
+    if count <= MAX_LINE {
+        return out;
+    }
+    let marker = format!(" ...({} characters)... ", count);
+    let keep = MAX_LINE - marker.len();
+    let head: String = out.chars().take(keep * 2 / 3).collect();
+    let tail: String = out.chars().skip(count - (keep - keep * 2 / 3)).collect();
+    format!("{head}{marker}{tail}")
+}
+
 /// An error and its causes on one line, each cause once: errors that show
 /// their source in their own text are not followed by it again.
 pub fn message_of(error: &anyhow::Error) -> String {
@@ -151,7 +193,7 @@ pub fn message_of(error: &anyhow::Error) -> String {
         }
         message.push_str(&text);
     }
-    printable(&message)
+    shortened(&printable(&message))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -207,7 +249,7 @@ pub fn warn_or_refuse(warnings: &[String], strict: bool) -> anyhow::Result<()> {
         }
     }
     for warning in warnings {
-        eprintln!("groombake: warning: {warning}");
+        eprintln!("groombake: warning: {}", shortened(&printable(warning)));
     }
     Ok(())
 }

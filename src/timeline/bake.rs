@@ -174,7 +174,8 @@ pub struct Prepared {
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
     pub seed: u64,
-    /// What the sag-free start did (`None`: off, or a continued bake).
+    /// What the sag-free start did (`None`: off, or a continued bake);
+    /// its `unstable` strands are found by the bake's probe, not here.
     pub sag_free: Option<sim::SagFreeReport>,
     /// The fibre radii the strands use, and where they came from.
     pub fibre_radius: super::fibre::FibreRadius,
@@ -319,12 +320,37 @@ pub(crate) fn shape_of(
                 .iter()
                 .map(|v| Vector::new(v[0] * scale, v[1] * scale, v[2] * scale))
                 .collect();
+            check_mesh_coordinates(&vertices).map_err(|message| BakeError::Input {
+                file: file.clone(),
+                message,
+            })?;
             SharedShape::trimesh(vertices, triangles).map_err(|e| BakeError::Input {
                 file,
                 message: format!("not a usable collider mesh: {e}"),
             })?
         }
     })
+}
+
+/// Refuses a collider vertex (after the mesh's scale) outside the scene's
+/// range, [`crate::budget::MAX_COORDINATE`]: its grid would be one cell
+/// holding the whole mesh, and f32 positions there cannot resolve a hair.
+fn check_mesh_coordinates(vertices: &[sim::parry3d::math::Vector]) -> Result<(), String> {
+    for (i, v) in vertices.iter().enumerate() {
+        for (c, axis) in ["x", "y", "z"].into_iter().enumerate() {
+            // Written so that NaN is outside too.
+            let inside = f64::from(v[c]).abs() <= crate::budget::MAX_COORDINATE;
+            if !inside {
+                return Err(format!(
+                    "vertex {i} has {axis} = {:e} m (after `scale`): outside \
+                     -{max:e} to {max:e} m",
+                    v[c],
+                    max = crate::budget::MAX_COORDINATE
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
@@ -337,7 +363,9 @@ pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
 }
 
 /// Imports the groom, builds the strands and colliders. Everything that can
-/// be wrong with the inputs shows here, before the first step.
+/// be wrong with the inputs shows here, before the first step; nothing is
+/// simulated (`validate` runs this), so the sag-free stability probe is
+/// left to the bake.
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
     let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
     let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
@@ -352,7 +380,9 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     let parameters = parameters_of(timeline);
     parameters.check()?;
     // The wind stage moves the hair without the rod solver: a timeline of
-    // wind stages only has no rest shape to balance.
+    // wind stages only has no rest shape to balance. The stability probe
+    // simulates: the bake runs it (`probe_sag_free`), not this preparation
+    // that `validate` shares.
     let rod_solver = timeline
         .file
         .stages
@@ -360,7 +390,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         .iter()
         .any(|s| *s.kind.get_ref() != StageKind::Wind);
     let sag_free = if timeline.file.solver.sag_free && !continues && rod_solver {
-        Some(strands.make_sag_free_checked(&parameters)?)
+        Some(strands.make_sag_free(parameters.gravity))
     } else {
         None
     };
@@ -368,12 +398,16 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
         let pose = pose_of(pose_at(c.motion.get_ref(), 0.0));
-        colliders.insert(Collider::new(
-            c.name.get_ref().clone(),
-            shape,
-            pose,
-            *c.friction.get_ref(),
-        ));
+        let collider =
+            Collider::checked(c.name.get_ref().clone(), shape, pose, *c.friction.get_ref())
+                .map_err(|message| match c.shape.get_ref() {
+                    ShapeSpec::Mesh { path, .. } => BakeError::Input {
+                        file: timeline.resolve(path),
+                        message,
+                    },
+                    _ => BakeError::Timeline(timeline.error_at(c.shape.span(), message)),
+                })?;
+        colliders.insert(collider);
     }
     check_preview_color(timeline, &groom)?;
     let fibre_radius = super::fibre::fibre_radius(timeline, &groom, strands.radii());
@@ -814,9 +848,12 @@ impl<'a> BakeRun<'a> {
             colliders,
             parameters,
             seed,
-            sag_free,
+            mut sag_free,
             fibre_radius,
         } = prepare(timeline, options.seed)?;
+        if let Some(sag_free) = &mut sag_free {
+            strands.probe_sag_free(&parameters, sag_free)?;
+        }
         // What the reader left out of the source, then what the exports
         // must change.
         let source = timeline.file.groom.source.as_ref();

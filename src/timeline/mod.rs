@@ -11,6 +11,7 @@ pub mod fibre;
 pub mod motion;
 pub mod outputs;
 pub mod plots;
+mod ranges;
 pub mod render;
 pub mod report;
 pub mod schema;
@@ -58,6 +59,21 @@ fn place(line: usize, column: usize) -> String {
     }
 }
 
+/// An input named by a timeline must be a regular file: a device, FIFO or
+/// directory is refused with its kind (reading one would never end).
+pub(crate) fn check_input_file(path: &Path, what: &str) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Err(_) => Err(format!("{what} '{}' not found", path.display())),
+        Ok(metadata) => match importers::special_kind(&metadata) {
+            Some(kind) => Err(format!(
+                "{what} '{}' is {kind}, not a regular file",
+                path.display()
+            )),
+            None => Ok(()),
+        },
+    }
+}
+
 /// 1-based line and column of a byte offset.
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(text.len());
@@ -84,12 +100,15 @@ impl Timeline {
     /// Reads, parses and checks a timeline. Every check that needs no
     /// simulation happens here, so a bad timeline fails before any work.
     pub fn load(path: &Path) -> Result<Timeline, TimelineError> {
-        let text = std::fs::read_to_string(path).map_err(|e| TimelineError {
+        let fail = |message: String| TimelineError {
             file: path.to_path_buf(),
             line: 0,
             column: 0,
-            message: format!("cannot read the timeline: {e}"),
-        })?;
+            message: format!("cannot read the timeline: {message}"),
+        };
+        let bytes = importers::read_limited(path, crate::budget::MAX_TIMELINE_BYTES)
+            .map_err(|e| fail(e.to_string()))?;
+        let text = String::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
         Timeline::parse(path, text)
     }
 
@@ -186,11 +205,8 @@ impl Timeline {
             }
             (Some(source), None) => {
                 let path = self.resolve(source.get_ref());
-                if !path.is_file() {
-                    return fail(
-                        source.span(),
-                        format!("groom file '{}' not found", path.display()),
-                    );
+                if let Err(message) = check_input_file(&path, "groom file") {
+                    return fail(source.span(), message);
                 }
             }
             (None, Some(g)) => {
@@ -211,7 +227,10 @@ impl Timeline {
         }
         check_keys(self, &f.groom.motion)?;
         if !f.groom.translate.iter().all(|c| c.is_finite()) {
-            return fail(0..0, "[groom] translate must be finite".into());
+            return fail(
+                ranges::span_of(self, "groom.translate"),
+                "[groom] translate must be finite".into(),
+            );
         }
         render::check_groom(self)?;
 
@@ -302,7 +321,10 @@ impl Timeline {
             }
         }
         if !s.gravity.iter().all(|g| g.is_finite()) {
-            return fail(0..0, "gravity must be finite".into());
+            return fail(
+                ranges::span_of(self, "solver.gravity"),
+                "gravity must be finite".into(),
+            );
         }
         if !(s.hair_radius.get_ref().is_finite() && *s.hair_radius.get_ref() > 0.0) {
             return fail(
@@ -449,6 +471,9 @@ impl Timeline {
         }
         if let Some(preview) = &f.preview {
             let path = Path::new(preview.sheet.get_ref());
+            if let Err(message) = check_output_name(path) {
+                return fail(preview.sheet.span(), message);
+            }
             if importers::extension_of(path) != "png" {
                 return fail(
                     preview.sheet.span(),
@@ -469,6 +494,9 @@ impl Timeline {
                 }
             }
         }
+        // Every number within its documented range (after the checks
+        // above, whose messages are more specific).
+        ranges::check(self)?;
         Ok(dt)
     }
 
@@ -491,11 +519,8 @@ impl Timeline {
             } => positive(&[*half_height, *radius]),
             ShapeSpec::Mesh { path, scale } => {
                 let resolved = self.resolve(path);
-                if !resolved.is_file() {
-                    return Err(self.error_at(
-                        shape.span(),
-                        format!("mesh file '{}' not found", resolved.display()),
-                    ));
+                if let Err(message) = check_input_file(&resolved, "mesh file") {
+                    return Err(self.error_at(shape.span(), message));
                 }
                 let extension = importers::extension_of(&resolved);
                 if !["obj", "glb", "gltf"].contains(&extension.as_str()) {
@@ -714,6 +739,7 @@ fn stage_steps_at(timeline: &Timeline, dt: f64) -> Vec<u64> {
 /// Whether the exporters know the extension of `path`; the message names
 /// what is wrong (no extension, or an unknown one) and the known ones.
 pub fn check_output_extension(path: &Path) -> Result<(), String> {
+    check_output_name(path)?;
     let extension = importers::extension_of(path);
     if exporters::EXTENSIONS.contains(&extension.as_str()) {
         return Ok(());
@@ -727,6 +753,32 @@ pub fn check_output_extension(path: &Path) -> Result<(), String> {
             format!(".{}", extension.escape_debug())
         )
     })
+}
+
+/// Refuses an output path that cannot name a file, whatever is on disk: a
+/// NUL byte (no system call takes it), a trailing separator or a last
+/// component of `.` or `..` (a folder). `Path` itself drops a trailing
+/// `/`, so the bytes are looked at.
+pub fn check_output_name(path: &Path) -> Result<(), String> {
+    use std::os::unix::ffi::OsStrExt;
+    let bytes = path.as_os_str().as_bytes();
+    if bytes.contains(&0) {
+        return Err("the path contains a NUL byte".into());
+    }
+    if bytes.is_empty() {
+        return Err("the path is empty".into());
+    }
+    if bytes.ends_with(b"/") {
+        return Err("the path ends with '/': it names a folder, not a file".into());
+    }
+    if matches!(
+        path.components().next_back(),
+        Some(std::path::Component::CurDir | std::path::Component::ParentDir) | None
+    ) || bytes.ends_with(b"/.")
+    {
+        return Err("the path names a folder ('.' or '..'), not a file".into());
+    }
+    Ok(())
 }
 
 fn check_keys(

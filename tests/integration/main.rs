@@ -21,6 +21,7 @@ mod hardening;
 mod hold;
 mod inspect;
 mod install;
+mod limits;
 mod preview;
 mod readme;
 mod refusals;

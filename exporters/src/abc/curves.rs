@@ -403,9 +403,13 @@ impl CurvesExport {
                 ));
             }
         }
+        // A per-strand `root_uv` is the curves' `uv` (above); any other
+        // (per vertex, as a scalp scatter writes it) is kept as a
+        // parameter of its own rather than dropped without a word.
+        let uv_written = root_uv(groom).is_some();
         for attribute in &groom.attributes {
             let is_width = width.is_some_and(|w| w.name == attribute.name);
-            if is_width || attribute.name == ROOT_UV {
+            if is_width || (attribute.name == ROOT_UV && uv_written) {
                 continue;
             }
             let name = property_name(&attribute.name);

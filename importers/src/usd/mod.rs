@@ -798,6 +798,12 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         set.losses
             .push("skipped normals: a groom holds tubes, not oriented ribbons".into());
     }
+    // By name once: a lookup per primvar was quadratic in their count.
+    let by_name: std::collections::HashMap<&str, &UsdAttribute> = prim
+        .attributes
+        .iter()
+        .map(|a| (a.name.as_str(), a))
+        .collect();
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()
@@ -813,8 +819,8 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         } else {
             continue;
         };
-        let indices = prim
-            .attribute(&format!("{}:indices", attribute.name))
+        let indices = by_name
+            .get(format!("{}:indices", attribute.name).as_str())
             .and_then(|a| a.static_value())
             .and_then(|v| v.numbers(1));
         match primvars::primvar(file, attribute, &name, indices, &set)? {
@@ -1052,12 +1058,20 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         let vertices_before = groom.points.len();
         let strands_before = groom.strand_vertex_counts.len();
         let earlier_counts = groom.strand_vertex_counts.clone();
+        // The groom's attributes by name (a search each was quadratic).
+        let mut index: std::collections::HashMap<String, usize> = groom
+            .attributes
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (a.name.clone(), i))
+            .collect();
         for attribute in set.attributes {
             let before = match attribute.scope {
                 Scope::Vertex => vertices_before,
                 Scope::Strand => strands_before,
             };
-            match groom.attribute_mut(&attribute.name) {
+            let known = index.get(&attribute.name).copied();
+            match known.and_then(|i| groom.attributes.get_mut(i)) {
                 Some(existing) => {
                     // Interpolation is per prim: where prims differ, the
                     // groom holds the attribute per vertex.
@@ -1092,6 +1106,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                     }
                     let mut values = empty_like(&attribute.values, before);
                     append(&mut values, &attribute.values);
+                    index.insert(attribute.name.clone(), groom.attributes.len());
                     groom.attributes.push(Attribute {
                         values,
                         ..attribute
