@@ -25,6 +25,7 @@ use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMa
 #[cfg(target_arch = "x86_64")]
 use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
+use super::hair_friction::{self, HairContact, HairContacts};
 use super::instructions::{in_widest, Instructions};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
@@ -46,6 +47,8 @@ pub struct Solver {
     /// The widest instructions the lanes may use.
     instructions: Instructions,
     grid: EdgeGrid,
+    /// Hair-hair contacts with Coulomb friction (physical model).
+    contacts: HairContacts,
     volume: VolumeGrid,
     dispatch: Dispatch,
     /// Time the phases of each step (`StepReport::phases`).
@@ -146,6 +149,9 @@ struct Context<'a> {
     blower: Option<Blower>,
     extra_acceleration: Option<&'a [V3]>,
     hair_hair: Option<(f32, &'a EdgeGrid)>,
+    /// Contacts between strands with Coulomb friction, solved with the
+    /// collider contacts (physical model, pairwise hair-hair).
+    hair_contacts: Option<&'a HairContacts>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
     colliders: &'a [PreparedCollider<'a>],
@@ -219,6 +225,12 @@ struct Work {
     predicted: Vec<V3>,
     /// The blower's velocity change at each vertex this step.
     blower: Vec<V3>,
+    /// The index of the strand this copy steps (its hair contacts).
+    strand: usize,
+    /// Per vertex, its share of the hair contacts and whether friction
+    /// stuck it this step (empty until friction runs).
+    touch: Vec<hair_friction::VertexContact>,
+    stuck: Vec<bool>,
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -275,6 +287,7 @@ impl Solver {
             simd: true,
             instructions: Instructions::of_this_cpu(),
             grid: EdgeGrid::default(),
+            contacts: HairContacts::default(),
             volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
             phase_clock: false,
@@ -372,6 +385,7 @@ impl Solver {
         }
         let Solver {
             grid,
+            contacts,
             volume,
             dispatch,
             simd,
@@ -406,19 +420,20 @@ impl Solver {
             );
             &*volume
         });
+        let rest_longest = || {
+            strands
+                .edges
+                .par_iter()
+                .with_min_len(4096)
+                .map(|e| e.rest_length)
+                .filter(|l| l.is_finite())
+                .reduce(|| 0.0, f32::max)
+        };
+        let mut longest = None;
         let hair_hair = match parameters.hair_hair_strength {
             _ if volumetric.is_some() => None,
             Some(alpha) if alpha > 0.0 => {
-                let rest_longest = {
-                    use rayon::prelude::*;
-                    strands
-                        .edges
-                        .par_iter()
-                        .with_min_len(4096)
-                        .map(|e| e.rest_length)
-                        .filter(|l| l.is_finite())
-                        .reduce(|| 0.0, f32::max)
-                };
+                let rest_longest = *longest.get_or_insert_with(rest_longest);
                 grid.build(
                     &strands.positions,
                     &strands.offsets,
@@ -427,6 +442,23 @@ impl Solver {
                     rest_longest,
                 );
                 Some(alpha)
+            }
+            _ => None,
+        };
+        let hair_contacts = match (hair_hair, parameters.hair_friction) {
+            (Some(_), Some(mu)) if mu > 0.0 && strands.material.model == Model::Physical => {
+                let rest_longest = *longest.get_or_insert_with(rest_longest);
+                contacts.build(
+                    &strands.positions,
+                    &strands.velocities,
+                    &strands.offsets,
+                    active,
+                    parameters.hair_radius,
+                    mu,
+                    rest_longest,
+                    parameters.dt,
+                );
+                Some(&*contacts)
             }
             _ => None,
         };
@@ -462,6 +494,7 @@ impl Solver {
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
+            hair_contacts,
             volume: volumetric,
             colliders: &prepared,
             root_transform: strands.root_transform,
@@ -653,6 +686,8 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
     let m = n - 1;
     work.resize(n);
+    work.strand = s.index;
+    work.stuck.clear();
     let dt = ctx.dt;
 
     // (ii) External forces, then the predicted positions.
@@ -1093,7 +1128,7 @@ impl Work {
         let n = s.positions.len();
         let m = n - 1;
         self.contact_normals[..n].fill([0.0; 3]);
-        if !ctx.colliders.is_empty() {
+        if self.touches(ctx) {
             self.begin_contacts(ctx, n);
         }
         // Taken out so the solve can borrow the rest of the working copy.
@@ -1104,11 +1139,69 @@ impl Work {
         self.direct = direct;
     }
 
+    /// The strand's contacts with other strands this step.
+    #[inline]
+    fn hair_contacts<'c>(&self, ctx: &Context<'c>) -> &'c [HairContact] {
+        ctx.hair_contacts.map_or(&[], |h| h.of(self.strand))
+    }
+
+    /// Whether the strand may touch anything this step (a collider or
+    /// another strand): the solve then keeps contacts.
+    #[inline]
+    fn touches(&self, ctx: &Context<'_>) -> bool {
+        !ctx.colliders.is_empty() || !self.hair_contacts(ctx).is_empty()
+    }
+
     /// Before the solve: the prediction kept (friction measures from it),
     /// the predicted positions projected.
     fn begin_contacts(&mut self, ctx: &Context<'_>, n: usize) {
         self.predicted[..n].copy_from_slice(&self.p[..n]);
         self.collide_contacts(ctx, n);
+        self.collide_hairs(ctx, n);
+    }
+
+    /// Pushes the strand's contact points with other strands out to two
+    /// radii (hair_friction.rs). Returns whether a vertex moved.
+    fn collide_hairs(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let Some(hairs) = ctx.hair_contacts else {
+            return false;
+        };
+        self.touch
+            .resize(n, hair_friction::VertexContact::default());
+        hair_friction::project(
+            hairs.of(self.strand),
+            &mut self.touch[..n],
+            &mut self.p[..n],
+            &self.w[..n],
+            &mut self.contact_normals[..n],
+            hairs.distance(),
+            ctx.dt,
+            0.01 * ctx.radius,
+        )
+    }
+
+    /// Coulomb friction at the strand's contacts with other strands, after
+    /// the last solve. Returns whether a vertex moved.
+    fn hair_friction(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let Some(hairs) = ctx.hair_contacts else {
+            return false;
+        };
+        self.stuck.clear();
+        self.stuck.resize(n, false);
+        self.touch
+            .resize(n, hair_friction::VertexContact::default());
+        hair_friction::friction(
+            hairs.of(self.strand),
+            &mut self.touch[..n],
+            &mut self.stuck,
+            &mut self.p[..n],
+            &self.x[..n],
+            &self.predicted[..n],
+            &self.w[..n],
+            hairs.mu(),
+            ctx.dt,
+            0.01 * ctx.radius,
+        )
     }
 
     /// After a solve: lane `lane`'s positions projected out of the
@@ -1125,8 +1218,10 @@ impl Work {
     ) -> bool {
         direct.positions_f32(lane, &mut self.p[..n]);
         let mut moved = self.collide_contacts(ctx, n);
+        moved |= self.collide_hairs(ctx, n);
         if last {
             moved |= self.friction(ctx, n);
+            moved |= self.hair_friction(ctx, n);
         }
         direct.set_positions(lane, &self.p[..n]);
         direct.set_contact_normals(lane, &self.contact_normals[..n]);
@@ -1139,6 +1234,9 @@ impl Work {
     /// hair radius).
     fn collide_contacts(&mut self, ctx: &Context<'_>, n: usize) -> bool {
         let mut moved = false;
+        if ctx.colliders.is_empty() {
+            return false;
+        }
         for i in 1..n {
             if self.w[i] <= 0.0 {
                 continue;
@@ -1208,11 +1306,11 @@ fn direct_input<'a>(
         p: &work.p[..n],
         q: &work.q[..m],
         free: &work.w[..n],
-        // Empty without colliders: the solve then skips reading zeros.
-        contact_normals: if ctx.colliders.is_empty() {
-            &[]
-        } else {
+        // Empty without contacts: the solve then skips reading zeros.
+        contact_normals: if work.touches(ctx) {
             &work.contact_normals[..n]
+        } else {
+            &[]
         },
         l: &work.l[..m],
         radii: s.radii,
@@ -1250,7 +1348,6 @@ fn newton_iterations<T: Real>(
     direct: &mut Direct<T>,
     n: usize,
 ) {
-    let colliding = !ctx.colliders.is_empty();
     let lanes = T::WIDTH;
     let mut progress = [Progress::Iterating; WIDE];
     let mut iteration = 0;
@@ -1271,8 +1368,8 @@ fn newton_iterations<T: Real>(
                     work.solves += 1;
                     let last = iteration >= ctx.iterations
                         || unconverged.is_some_and(|u| u.lane(lane) == 0.0);
-                    let moved =
-                        colliding && work.contacts_after_iteration(direct, lane, ctx, n, last);
+                    let moved = work.touches(ctx)
+                        && work.contacts_after_iteration(direct, lane, ctx, n, last);
                     if last {
                         progress[lane] = if moved {
                             Progress::OneMore
@@ -1300,7 +1397,6 @@ fn step_group_direct<T: Real>(
 ) {
     let n = strands[0].positions.len();
     let m = n - 1;
-    let colliding = !ctx.colliders.is_empty();
     let lanes = T::WIDTH;
     // The phases' times go to the first lane's working copy (summed over
     // all of them at the end of the step).
@@ -1318,7 +1414,7 @@ fn step_group_direct<T: Real>(
     clock.lap(&mut phases.bonds);
     for work in works.iter_mut().take(lanes) {
         work.contact_normals[..n].fill([0.0; 3]);
-        if colliding {
+        if work.touches(ctx) {
             work.begin_contacts(ctx, n);
         }
     }
@@ -1507,6 +1603,18 @@ fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool)
             &work.l[..m],
             &mut work.corrections[..n],
         );
+    }
+    if let Some(hairs) = ctx.hair_contacts {
+        // Stuck vertices stay stuck through the last solve.
+        if work.stuck.len() == n && !hairs.of(work.strand).is_empty() {
+            hair_friction::restick(
+                &work.touch[..n],
+                &work.stuck,
+                &mut work.p[..n],
+                &work.x[..n],
+                ctx.dt,
+            );
+        }
     }
     if !ctx.colliders.is_empty() {
         for i in 1..n {

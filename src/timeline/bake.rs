@@ -206,6 +206,16 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
             .map(|h| h.get_ref())
             .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
             .map(|h| h.strength),
+        // Friction between hairs: the physical model's pairwise mode, on by
+        // default (docs/model.md).
+        hair_friction: s
+            .hair_hair
+            .as_ref()
+            .map(|h| h.get_ref())
+            .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
+            .filter(|_| model == crate::sim::Model::Physical)
+            .map(|h| h.friction.unwrap_or(super::schema::DEFAULT_HAIR_FRICTION))
+            .filter(|mu| *mu > 0.0),
         volumetric: s.hair_hair.as_ref().and_then(|h| h.get_ref().volumetric()),
         linear_damping: damping.linear,
         angular_damping: damping.angular,

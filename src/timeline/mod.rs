@@ -304,6 +304,9 @@ impl Timeline {
             if let Some(problem) = hh.get_ref().volumetric().and_then(|v| v.problem()) {
                 return fail(hh.span(), format!("hair_hair {problem}"));
             }
+            if let Some(problem) = hh.get_ref().friction_problem(*f.material.model.get_ref()) {
+                return fail(hh.span(), problem);
+            }
             if !(0.0..=10.0).contains(&hh.get_ref().strength) {
                 return fail(
                     hh.span(),
