@@ -71,8 +71,8 @@ pub struct HairContacts {
     key_chunks: Vec<Vec<(u64, u32)>>,
     /// All of them, sorted by key then edge.
     keys: Vec<(u64, u32)>,
-    /// Per chunk of strands: their contacts in strand then edge order,
-    /// each strand's range of them, and a scratch of candidate edges.
+    /// Per chunk of strands: their contacts in strand then edge order, and
+    /// each strand's range of them.
     chunks: Vec<Chunk>,
     /// Per strand, its contacts: (chunk, start, end) in `chunks`.
     ranges: Vec<(u32, u32, u32)>,
@@ -82,7 +82,6 @@ pub struct HairContacts {
 struct Chunk {
     contacts: Vec<HairContact>,
     ranges: Vec<(u32, u32)>,
-    candidates: Vec<u32>,
 }
 
 /// The cell of a point, clamped so that far-off points cannot overflow.
@@ -302,7 +301,6 @@ impl HairContacts {
                 let Chunk {
                     contacts: out,
                     ranges,
-                    candidates,
                 } = chunk;
                 out.clear();
                 ranges.clear();
@@ -320,7 +318,6 @@ impl HairContacts {
                         let Some((lo, hi)) = cell_box(a, b, 0.5 * reach, inv_cell) else {
                             continue;
                         };
-                        candidates.clear();
                         for x in lo[0]..=hi[0] {
                             for y in lo[1]..=hi[1] {
                                 for z in lo[2]..=hi[2] {
@@ -329,50 +326,66 @@ impl HairContacts {
                                     for &(_, other) in
                                         keys[start..].iter().take_while(|e| e.0 == key)
                                     {
-                                        if owner[other as usize] != own {
-                                            candidates.push(other);
+                                        let f = other as usize;
+                                        if owner[f] == own {
+                                            continue;
                                         }
+                                        let (c, d) = (positions[f], positions[f + 1]);
+                                        // Boxes apart by more than the reach: no
+                                        // contact (most pairs of a cell).
+                                        if (0..3).any(|k| {
+                                            a[k].min(b[k]) > c[k].max(d[k]) + reach
+                                                || a[k].max(b[k]) + reach < c[k].min(d[k])
+                                        }) {
+                                            continue;
+                                        }
+                                        // Each pair once: in the lowest cell both
+                                        // edges' boxes share.
+                                        let other_low = cell_of(
+                                            std::array::from_fn(|k| c[k].min(d[k]) - 0.5 * reach),
+                                            inv_cell,
+                                        );
+                                        if [x, y, z]
+                                            != std::array::from_fn(|k| lo[k].max(other_low[k]))
+                                        {
+                                            continue;
+                                        }
+                                        let (s, t) = closest_parameters(a, b, c, d);
+                                        if !closest_feature(&edge_of, v, f, s, t, a, c) {
+                                            continue;
+                                        }
+                                        let (on_own, on_other) = (lerp3(a, b, s), lerp3(c, d, t));
+                                        let gap = sub(on_own, on_other);
+                                        let gap_length = length(gap);
+                                        if gap_length.is_nan() || gap_length >= reach {
+                                            continue;
+                                        }
+                                        let normal = if gap_length > 1e-3 * distance {
+                                            scale(gap, 1.0 / gap_length)
+                                        } else {
+                                            // Crossing at their axes: across both.
+                                            let across = cross(sub(b, a), sub(d, c));
+                                            let l = length(across);
+                                            if l.is_nan() || l <= 0.0 {
+                                                continue;
+                                            }
+                                            scale(across, 1.0 / l)
+                                        };
+                                        let other_velocity =
+                                            lerp3(velocities[f], velocities[f + 1], t);
+                                        if !is_finite3(other_velocity) {
+                                            continue;
+                                        }
+                                        out.push(HairContact {
+                                            edge: (v - first) as u32,
+                                            s,
+                                            other: on_other,
+                                            other_velocity,
+                                            normal,
+                                        });
                                     }
                                 }
                             }
-                        }
-                        candidates.sort_unstable();
-                        candidates.dedup();
-                        for &other in candidates.iter() {
-                            let f = other as usize;
-                            let (c, d) = (positions[f], positions[f + 1]);
-                            let (s, t) = closest_parameters(a, b, c, d);
-                            if !closest_feature(&edge_of, v, f, s, t, a, c) {
-                                continue;
-                            }
-                            let (on_own, on_other) = (lerp3(a, b, s), lerp3(c, d, t));
-                            let gap = sub(on_own, on_other);
-                            let gap_length = length(gap);
-                            if gap_length.is_nan() || gap_length >= reach {
-                                continue;
-                            }
-                            let normal = if gap_length > 1e-3 * distance {
-                                scale(gap, 1.0 / gap_length)
-                            } else {
-                                // Crossing at their axes: across both.
-                                let across = cross(sub(b, a), sub(d, c));
-                                let l = length(across);
-                                if l.is_nan() || l <= 0.0 {
-                                    continue;
-                                }
-                                scale(across, 1.0 / l)
-                            };
-                            let other_velocity = lerp3(velocities[f], velocities[f + 1], t);
-                            if !is_finite3(other_velocity) {
-                                continue;
-                            }
-                            out.push(HairContact {
-                                edge: (v - first) as u32,
-                                s,
-                                other: on_other,
-                                other_velocity,
-                                normal,
-                            });
                         }
                     }
                     ranges.push((begin, out.len() as u32));

@@ -132,3 +132,126 @@ fn a_strand_across_hair_sticks_inside_the_cone_and_slides_at_the_coulomb_rate() 
         }
     }
 }
+
+/// A strand hung over a fixed horizontal rod (a collider of friction `mu`,
+/// radius 1.5 cm, along z): two 10 cm legs and the half turn between
+/// them, 2.5 mm edges, a soft string (E 10 MPa: its bending stiffness is
+/// about 1 % of the tension over the rod). End masses are emulated by the
+/// legs' weight: leg 1 weighs `k1` times its own, leg 2 `ratio * k1`
+/// times (an extra acceleration on their vertices), the wrapped part
+/// nothing (so the tensions at the rod are the legs' weights, and the
+/// capstan law holds as for a weightless rope). The root, at the bottom of
+/// leg 1, moves with vertex 1 (so that end is free). Returns how far the end
+/// of leg 2 moved down in `seconds`.
+fn capstan(mu: f32, ratio: f32, seconds: f32) -> f64 {
+    use parry3d::math::{Rot3, Vector};
+    use parry3d::shape::SharedShape;
+    let (rod, radius, leg, edge) = (0.015f32, 4e-5f32, 0.1f32, 0.0025f32);
+    let around = rod + radius;
+    let mut points: Vec<[f32; 3]> = Vec::new();
+    let legs = (leg / edge).round() as usize;
+    // Leg 1 up the left side (x = -around), from its end to the rod's
+    // height.
+    for i in 0..legs {
+        points.push([-around, -leg + edge * i as f32, 0.0]);
+    }
+    let turn = (std::f32::consts::PI * around / edge).round() as usize;
+    let first_wrapped = points.len();
+    for i in 0..=turn {
+        let a = std::f32::consts::PI * (1.0 - i as f32 / turn as f32);
+        points.push([around * a.cos(), around * a.sin(), 0.0]);
+    }
+    let last_wrapped = points.len() - 1;
+    for i in 1..=legs {
+        points.push([around, -edge * i as f32, 0.0]);
+    }
+    let mut groom = groom::Groom::from_strands([points.clone()]);
+    groom.units = groom::Units::METERS;
+    let material = Material {
+        youngs_modulus: 1.0e7,
+        ..Material::default()
+    };
+    let mut set = StrandSet::from_groom(&groom, &material).unwrap();
+    let parameters = SolverParameters {
+        dt: 1.0 / 360.0,
+        iterations: 5,
+        hair_radius: radius,
+        linear_damping: 0.0,
+        angular_damping: 0.0,
+        ..SolverParameters::default()
+    };
+    let g = parameters.gravity;
+    let k1 = 3.0f32;
+    let extra: Vec<[f32; 3]> = (0..points.len())
+        .map(|i| {
+            let weight = if i < first_wrapped {
+                k1
+            } else if i <= last_wrapped {
+                0.0
+            } else {
+                ratio * k1
+            };
+            math::scale(g, weight - 1.0)
+        })
+        .collect();
+    let mut solver = Solver::new(parameters).unwrap();
+    let mut colliders = ColliderSet::new();
+    colliders.insert(Collider::new(
+        "rod",
+        SharedShape::cylinder(0.05, rod),
+        Pose::from_parts(
+            Vector::new(0.0, 0.0, 0.0),
+            Rot3::from_axis_angle(Vector::new(1.0, 0.0, 0.0), std::f32::consts::FRAC_PI_2),
+        ),
+        mu,
+    ));
+    let environment = Environment {
+        extra_acceleration: Some(&extra),
+        ..Environment::default()
+    };
+    let start = set.positions().to_vec();
+    for step in 0..(seconds / parameters.dt).round() as usize {
+        // The root moves as vertex 1 is about to (where it is, on at its
+        // velocity): that end is free.
+        let moved = math::add(
+            math::sub(set.positions()[1], start[1]),
+            math::scale(set.velocities()[1], parameters.dt),
+        );
+        set.set_root_transform(&Pose::from_translation(Vector::new(
+            moved[0], moved[1], moved[2],
+        )));
+        let report = solver.step(&mut set, &colliders, &environment).unwrap();
+        assert!(report.contained.is_empty(), "step {step}: {report:?}");
+    }
+    let end = points.len() - 1;
+    f64::from(start[end][1] - set.positions()[end][1])
+}
+
+/// The capstan law (issue 33) with the colliders' Coulomb friction: the
+/// strand stays put while `T2 / T1 < 0.95 e^(mu pi)` and slides beyond
+/// `1.05 e^(mu pi)`, for friction 0.2 and 0.5.
+///
+/// Fails today (mu 0.2: the heavy end moves 48 mm in 1 s at 0.95 of the
+/// ratio, 60 mm at 1.05): the colliders' friction measures the normal
+/// force as the push from the predicted position, which is the weight
+/// pressing a vertex on a surface but not the tension pulling a wrapped
+/// string onto it (the solve pulls the vertex in and the projection puts
+/// it back: no push from the prediction, so no friction). Hair-to-collider
+/// friction is unchanged by issue 33's item 1; this test is kept for the
+/// fix (the normal force from the contact's share of the solve).
+#[test]
+#[ignore = "collider friction does not see a wrapped string's tension (see the doc)"]
+fn a_strand_over_a_rod_holds_below_the_capstan_ratio_and_slides_above_it() {
+    for mu in [0.2f32, 0.5] {
+        let law = (mu * std::f32::consts::PI).exp();
+        let held = capstan(mu, 0.95 * law, 1.0);
+        let slid = capstan(mu, 1.05 * law, 1.0);
+        eprintln!(
+            "mu {mu}: e^(mu pi) = {law:.3}; at 0.95 of it the heavy end moved {:.3} mm in 1 s, at 1.05 {:.2} mm",
+            held * 1e3,
+            slid * 1e3
+        );
+        assert!(held.abs() < 1e-3, "mu {mu}: held end moved {held} m");
+        assert!(slid > 1e-2, "mu {mu}: heavy end moved only {slid} m");
+    }
+}

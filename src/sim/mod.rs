@@ -21,6 +21,10 @@
 //!   (17). The physical model's Newton iterations stop early for a strand
 //!   whose edges are within `SolverParameters::tolerance` (and its constants,
 //!   masses and compliances, are found in the solve's lanes, direct.rs).
+//!   With pairwise hair-hair and `hair_friction` (physical model) the
+//!   contacts between strands are found at the start of the step and
+//!   solved with the collider contacts, Coulomb friction included, each
+//!   strand against the others as kinematic targets (hair_friction.rs).
 //!   Strands run in parallel in groups of four or eight (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.

@@ -3,8 +3,11 @@
 //! 1. `predict` (forces): external forces, predicted positions and frames;
 //! 2. `rest_shape` (bonds): bond-rate changes, rest shape from the bonds (15);
 //! 3. the constraint solve (constraints): `n` iterations of stretch/shear,
-//!    bend/twist and collisions (the physical model's Newton iterations),
-//!    then `end_constraints`: the inextensibility pass, the final collisions;
+//!    bend/twist and collisions (the physical model's Newton iterations,
+//!    with the contacts between strands and their Coulomb friction when
+//!    `hair_friction` is on: hair_friction.rs), then `end_constraints`:
+//!    the inextensibility pass, stuck hair contacts put back, the final
+//!    collisions;
 //! 4. `velocities` (forces): velocities from positions, the finite check;
 //! 5. `update_bonds` (bonds): the bond update (17);
 //! 6. `commit` (forces).

@@ -974,7 +974,15 @@ mod tests {
     /// Mean |v_x| over the free vertices after one step of the bundle
     /// whose strands move +x and -x in turn at 0.5 m/s.
     fn mean_crossing_speed(volumetric: Option<Volumetric>) -> f32 {
+        mean_crossing_speed_of(volumetric, 1.0)
+    }
+
+    /// [`mean_crossing_speed`] with fibres `thicker` times the default.
+    fn mean_crossing_speed_of(volumetric: Option<Volumetric>, thicker: f32) -> f32 {
         let mut set = bundle(8);
+        for r in &mut set.radii {
+            *r *= thicker;
+        }
         for (strand, w) in set.offsets.clone().windows(2).enumerate() {
             let sign = if strand % 2 == 0 { 1.0 } else { -1.0 };
             for v in &mut set.velocities[w[0] + 1..w[1]] {
@@ -1017,6 +1025,36 @@ mod tests {
         // 1 - exp(-200 / 360) = 43 % of the difference away.
         assert!(without > 0.25, "{without}");
         assert!(with < 0.65 * without, "{with} vs {without}");
+    }
+
+    /// Grid friction (issue 33) filters a vertex's velocity toward the
+    /// grid's in proportion to the hair's volume fraction: off, the
+    /// strands cross at full speed; on, they slow, and four times as much
+    /// hair volume (fibres twice as thick) slows them about four times as
+    /// much (at `grid_friction` 1000: by 1.1 % and 4.5 % in a step).
+    #[test]
+    fn grid_friction_slows_crossing_hair_in_proportion_to_its_density() {
+        let settings = |friction| {
+            Some(Volumetric {
+                smoothing: 0.0,
+                repulsion: 0.0,
+                friction,
+                ..Volumetric::default()
+            })
+        };
+        let free = mean_crossing_speed_of(settings(0.0), 1.0);
+        let thin = mean_crossing_speed_of(settings(5000.0), 1.0);
+        let thick = mean_crossing_speed_of(settings(5000.0), 2.0);
+        let free_thick = mean_crossing_speed_of(settings(0.0), 2.0);
+        eprintln!(
+            "crossing speed: free {free} / {free_thick}, grid friction: thin {thin}, thick {thick}"
+        );
+        assert!(thin < 0.97 * free, "{thin} vs {free}");
+        let (slowed_thin, slowed_thick) = (1.0 - thin / free, 1.0 - thick / free_thick);
+        assert!(
+            slowed_thick > 2.5 * slowed_thin,
+            "slowed {slowed_thin} (thin), {slowed_thick} (thick)"
+        );
     }
 
     /// RMS distance of the tips from the bundle's axis after `seconds`.
