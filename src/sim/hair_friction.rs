@@ -373,7 +373,19 @@ impl HairContacts {
                                         };
                                         let other_velocity =
                                             lerp3(velocities[f], velocities[f + 1], t);
-                                        if !is_finite3(other_velocity) {
+                                        let own_velocity =
+                                            lerp3(velocities[v], velocities[v + 1], s);
+                                        // Only fibres that may touch in this
+                                        // step: two radii plus twice their
+                                        // closing distance (a margin of the
+                                        // fastest hair's motion made hair that
+                                        // falls together touch everything
+                                        // within millimetres).
+                                        let closing = length(sub(own_velocity, other_velocity));
+                                        if !is_finite3(other_velocity)
+                                            || closing.is_nan()
+                                            || gap_length >= 2.0 * distance + 2.0 * closing * dt
+                                        {
                                             continue;
                                         }
                                         out.push(HairContact {
