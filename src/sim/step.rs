@@ -1130,7 +1130,7 @@ impl Work {
     fn solve_direct(&mut self, ctx: &Context<'_>, material: RodMaterial, s: &StrandMut<'_>) {
         let n = s.positions.len();
         let m = n - 1;
-        self.contact_normals[..n].fill([0.0; 3]);
+        self.clear_contacts(n);
         if self.touches(ctx) {
             self.begin_contacts(ctx, n);
         }
@@ -1140,6 +1140,16 @@ impl Work {
         newton_iterations(ctx, std::slice::from_mut(self), &mut direct, n);
         direct.end(&mut [(&mut self.p[..n], &mut self.q[..m])]);
         self.direct = direct;
+    }
+
+    /// No contact yet this step. The colliders' friction data too: a
+    /// vertex that only touches hair has a contact normal but no collider,
+    /// and must not read the friction of another strand this working copy
+    /// stepped before (that made a bake depend on the thread count).
+    fn clear_contacts(&mut self, n: usize) {
+        self.contact_normals[..n].fill([0.0; 3]);
+        self.contact_velocities[..n].fill([0.0; 3]);
+        self.contact_friction[..n].fill(0.0);
     }
 
     /// The strand's contacts with other strands this step.
@@ -1416,7 +1426,7 @@ fn step_group_direct<T: Real>(
     }
     clock.lap(&mut phases.bonds);
     for work in works.iter_mut().take(lanes) {
-        work.contact_normals[..n].fill([0.0; 3]);
+        work.clear_contacts(n);
         if work.touches(ctx) {
             work.begin_contacts(ctx, n);
         }
