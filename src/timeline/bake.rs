@@ -223,6 +223,18 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
             .map(|h| h.get_ref())
             .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
             .map(|h| h.strength),
+        // Friction between hairs: the physical model's pairwise mode, when
+        // the timeline asks for it. Off by default while its contact search
+        // costs about 21 times the frictionless step (docs/performance.md);
+        // `DEFAULT_HAIR_FRICTION` is the value for dry hair (docs/model.md).
+        hair_friction: s
+            .hair_hair
+            .as_ref()
+            .map(|h| h.get_ref())
+            .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
+            .filter(|_| model == crate::sim::Model::Physical)
+            .and_then(|h| h.friction)
+            .filter(|mu| *mu > 0.0),
         volumetric: s.hair_hair.as_ref().and_then(|h| h.get_ref().volumetric()),
         linear_damping: damping.linear,
         angular_damping: damping.angular,

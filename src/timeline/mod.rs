@@ -336,6 +336,9 @@ impl Timeline {
             if let Some(problem) = hh.get_ref().volumetric().and_then(|v| v.problem()) {
                 return fail(hh.span(), format!("hair_hair {problem}"));
             }
+            if let Some(problem) = hh.get_ref().friction_problem(*f.material.model.get_ref()) {
+                return fail(hh.span(), problem);
+            }
             if !(0.0..=10.0).contains(&hh.get_ref().strength) {
                 return fail(
                     hh.span(),
@@ -912,6 +915,57 @@ duration = 0.5
         let parameters = bake::parameters_of(&pairwise);
         assert_eq!(parameters.hair_hair_strength, Some(5.0));
         assert_eq!(parameters.volumetric, None);
+    }
+
+    /// Friction between hairs (issue 33): off unless asked for (its search
+    /// is not yet within the step's budget), in the physical model's
+    /// pairwise mode; 0 switches it off, out of range or where it does not
+    /// apply is an error at the key's line.
+    #[test]
+    fn hair_friction_defaults_reaches_the_solver_and_bad_values_are_named() {
+        let with = |table: &str| format!("{GOOD}\n[solver]\nhair_hair = {{ {table} }}\n");
+        let parameters = |table: &str| bake::parameters_of(&load_text(&with(table)).unwrap());
+        assert_eq!(parameters("strength = 5.0").hair_friction, None);
+        assert_eq!(
+            parameters(&format!("strength = 5.0, friction = {}", schema::DEFAULT_HAIR_FRICTION))
+                .hair_friction,
+            Some(schema::DEFAULT_HAIR_FRICTION)
+        );
+        assert_eq!(
+            parameters("strength = 5.0, friction = 0.1").hair_friction,
+            Some(0.1)
+        );
+        assert_eq!(
+            parameters("strength = 5.0, friction = 0").hair_friction,
+            None
+        );
+        let volumetric = parameters("mode = \"volumetric\", grid_friction = 500.0");
+        assert_eq!(volumetric.hair_friction, None);
+        assert_eq!(volumetric.volumetric.unwrap().friction, 500.0);
+        for (table, says) in [
+            ("strength = 5.0, friction = 0.7", "from 0.05 to 0.5"),
+            ("strength = 5.0, friction = 0.01", "from 0.05 to 0.5"),
+            ("mode = \"volumetric\", friction = 0.3", "pairwise mode"),
+            ("strength = 5.0, grid_friction = 10.0", "volumetric mode"),
+            (
+                "mode = \"volumetric\", grid_friction = -1.0",
+                "grid_friction must be",
+            ),
+        ] {
+            let e = load_text(&with(table)).unwrap_err();
+            assert!(e.line == 10 && e.message.contains(says), "{table}: {e}");
+        }
+        let paper = format!(
+            "{GOOD}\n[material]\nmodel = \"paper\"\n[solver]\nhair_hair = {{ strength = 5.0, friction = 0.3 }}\n"
+        );
+        let e = load_text(&paper).unwrap_err();
+        assert!(e.message.contains("physical model only"), "{e}");
+        // The paper model's pairwise hair-hair stays frictionless.
+        let paper = paper.replace(", friction = 0.3", "");
+        assert_eq!(
+            bake::parameters_of(&load_text(&paper).unwrap()).hair_friction,
+            None
+        );
     }
 
     #[test]

@@ -213,7 +213,17 @@ pub struct HairHairSpec {
     pub smoothing: Option<f32>,
     /// Push down the hair's volume fraction gradient, m^2/s^2 (volumetric).
     pub repulsion: Option<f32>,
+    /// Coulomb friction coefficient between hairs (pairwise mode, physical
+    /// model): 0 (off) or 0.05 - 0.5; `None`: [`DEFAULT_HAIR_FRICTION`].
+    pub friction: Option<f32>,
+    /// Friction through the grid, 1/s per unit volume fraction
+    /// (volumetric mode): see `Volumetric::friction`.
+    pub grid_friction: Option<f32>,
 }
+
+/// Hair-on-hair Coulomb coefficient of dry hair (docs/model.md, "Friction
+/// between hairs", for the sources).
+pub const DEFAULT_HAIR_FRICTION: f32 = 0.3;
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -232,7 +242,30 @@ impl HairHairSpec {
             cell_size: self.cell_size.unwrap_or(default.cell_size),
             smoothing: self.smoothing.unwrap_or(default.smoothing),
             repulsion: self.repulsion.unwrap_or(default.repulsion),
+            friction: self.grid_friction.unwrap_or(default.friction),
         })
+    }
+
+    /// What is wrong with the friction keys for material model `model`.
+    pub fn friction_problem(&self, model: crate::sim::Model) -> Option<String> {
+        let pairwise = self.mode == HairHairMode::Pairwise;
+        if let Some(mu) = self.friction {
+            if !pairwise {
+                return Some("hair_hair friction applies to the pairwise mode (the volumetric mode has grid_friction)".into());
+            }
+            if model != crate::sim::Model::Physical {
+                return Some("hair_hair friction applies to the physical model only".into());
+            }
+            if !(mu == 0.0 || (0.05..=0.5).contains(&mu)) {
+                return Some(format!(
+                    "hair_hair friction must be 0 (off) or a coefficient from 0.05 to 0.5, not {mu}"
+                ));
+            }
+        }
+        if self.grid_friction.is_some() && pairwise {
+            return Some("hair_hair grid_friction applies to the volumetric mode (the pairwise mode has friction)".into());
+        }
+        None
     }
 }
 
