@@ -64,12 +64,12 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
-mod hold;
-#[cfg(test)]
-mod hold_tests;
 mod hair_friction;
 #[cfg(test)]
 mod hair_friction_tests;
+mod hold;
+#[cfg(test)]
+mod hold_tests;
 mod instructions;
 mod lanes;
 mod math;

@@ -4,10 +4,10 @@
 
 mod applies;
 pub mod bake;
-pub mod hold;
 pub mod drying;
-pub mod frame_attributes;
 pub mod fibre;
+pub mod frame_attributes;
+pub mod hold;
 pub mod motion;
 pub mod outputs;
 pub mod plots;
@@ -927,8 +927,11 @@ duration = 0.5
         let parameters = |table: &str| bake::parameters_of(&load_text(&with(table)).unwrap());
         assert_eq!(parameters("strength = 5.0").hair_friction, None);
         assert_eq!(
-            parameters(&format!("strength = 5.0, friction = {}", schema::DEFAULT_HAIR_FRICTION))
-                .hair_friction,
+            parameters(&format!(
+                "strength = 5.0, friction = {}",
+                schema::DEFAULT_HAIR_FRICTION
+            ))
+            .hair_friction,
             Some(schema::DEFAULT_HAIR_FRICTION)
         );
         assert_eq!(

@@ -9,8 +9,8 @@
 
 mod compose;
 mod crate_reader;
-mod primvars;
 mod frame_primvars;
+mod primvars;
 mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
