@@ -158,9 +158,9 @@ impl BakeError {
 /// `docs/tuning.md` ("Troubleshooting") explains.
 fn blowup_remedy(colliders: bool) -> &'static str {
     if colliders {
-        "likely cause: a collider inside the hair's roots (move it off the scalp; `groombake inspect MESH` prints a mesh's bounds) or a step too large (lower [solver] dt, e.g. \"1/720\")"
+        "likely cause: a collider inside the hair's roots (move it off the scalp) or a step too large (lower [solver] dt)"
     } else {
-        "likely cause: a step too large for the stage's forces (lower [solver] dt, e.g. \"1/720\")"
+        "likely cause: a step too large for the stage's forces (lower [solver] dt)"
     }
 }
 
