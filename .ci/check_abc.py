@@ -27,6 +27,11 @@ must hold; its keys, all optional:
   scaled        {"of": "other.abc", "by": k}: every point (sample 0) is the
                 other file's point times k, to 1e-6 relative (the units
                 check: the same groom written in m and in cm)
+  frame_values  {name: [[sample, "min_above" or "max_below", bound], ...]}:
+                the float .arbGeomParams property's values at that sample
+                (a bake's wetness and bond rates, per frame)
+  time_varying  the .arbGeomParams properties whose samples change; every
+                other one must be constant (stored once)
 
 Exits 1 on any failure, and when the directory holds no .abc file.
 """
@@ -138,8 +143,35 @@ def check_curves(obj, file_name, failures, totals):
     if arbitrary.valid():
         names = {arbitrary.getPropertyHeader(i).getName() for i in range(arbitrary.getNumProperties())}
     totals["arbitrary"].append(names)
+    for name in sorted(names):
+        header = arbitrary.getPropertyHeader(name)
+        if header.isArray() and str(header.getDataType()) == "float32_t":
+            # alembic3d's ISampleSelector(number) selects by time: sample i
+            # is asked for at its time.
+            param = AbcGeom.IFloatGeomParam(arbitrary, name)
+            param_times = param.getTimeSampling()
+            values = [list(param.getExpandedValue(
+                Abc.ISampleSelector(param_times.getSampleTime(i))).getVals())
+                for i in range(param.getNumSamples())]
+            totals["float_params"][name] = values
+        if not param_is_constant(arbitrary, name):
+            totals["varying"].add(name)
     if "groom_guide" in names:
         count_guides(arbitrary, len(counts), where, failures, totals)
+
+
+def param_is_constant(arbitrary, name):
+    """Whether every sample of a .arbGeomParams property is the same (then
+    Alembic stores it once)."""
+    header = arbitrary.getPropertyHeader(name)
+    if header.isCompound():
+        values = Abc.ICompoundProperty(arbitrary, name)
+        if not values.getPropertyHeader(".vals"):
+            return True
+        return Abc.IArrayProperty(values, ".vals").isConstant()
+    if header.isArray():
+        return Abc.IArrayProperty(arbitrary, name).isConstant()
+    return Abc.IScalarProperty(arbitrary, name).isConstant()
 
 
 def int_values(arbitrary, name):
@@ -232,6 +264,8 @@ def check_file(path, failures):
         "arbitrary": [],
         "positions": [],
         "guides": 0,
+        "float_params": {},
+        "varying": set(),
     }
     paths = set()
     curves_objects = 0
@@ -282,9 +316,28 @@ def check_file(path, failures):
         check_scaled(path, totals["positions"], expect["scaled"], failures)
     if "guides" in expect and expect["guides"] != totals["guides"]:
         failures.add(name, f"guides: expected {expect['guides']}, found {totals['guides']}")
+    if "time_varying" in expect and totals["varying"] != set(expect["time_varying"]):
+        failures.add(name, f"time-varying .arbGeomParams {sorted(totals['varying'])}, "
+                           f"expected {sorted(expect['time_varying'])}")
+    for param, checks in expect.get("frame_values", {}).items():
+        samples = totals["float_params"].get(param)
+        if not samples:
+            failures.add(name, f"no float .arbGeomParams property {param}")
+            continue
+        for index, kind, bound in checks:
+            if index >= len(samples) or not samples[index]:
+                failures.add(name, f"{param} has no sample {index} ({len(samples)} samples)")
+                continue
+            low, high = min(samples[index]), max(samples[index])
+            ok = low > bound if kind == "min_above" else high < bound
+            if not ok:
+                failures.add(name, f"{param} at sample {index} spans {low:.4g}..{high:.4g}, "
+                                   f"expected {kind} {bound}")
+            else:
+                print(f"     {name}: {param} at sample {index}: {low:.4g}..{high:.4g}")
     known = {
         "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
-        "unreal_groom", "scaled", "guides",
+        "unreal_groom", "scaled", "guides", "frame_values", "time_varying",
     }
     unknown = set(expect) - known
     if unknown:

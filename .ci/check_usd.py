@@ -14,7 +14,11 @@ meters_per_unit, up_axis, basis, time_samples, start_time_code,
 end_time_code, time_codes_per_second, widths, primvars, and sample_points:
 `[time code, point index, [x, y, z]]` items checked in the first curves prim,
 and topology: `[time code, curves, points]` items for a file whose
-curveVertexCounts are time samples). A file with time-sampled counts is
+curveVertexCounts are time samples; frame_values: `{primvar: [[time code,
+"min_above" or "max_below", bound], ...]}`, the primvar's time-sampled
+values at that time code in every curves prim; time_varying: the primvars
+that must have time samples, every other primvar must have none, so the
+attributes that hold still are written once). A file with time-sampled counts is
 checked at its first time sample where others are checked at the default
 time, and its counts must fit its points at every time sample.
 Every file must also pass all of usd-core's registered validators
@@ -197,6 +201,34 @@ def check_file(path):
             elif primvars[name].GetInterpolation() != interpolation:
                 fail(f"{prim_path}: primvar {name} is {primvars[name].GetInterpolation()}, "
                      f"expected {interpolation}")
+
+    # Per-frame attributes: time samples where they change, none elsewhere.
+    if "time_varying" in expect:
+        for curves in curves_prims:
+            sampled = sorted(
+                pv.GetPrimvarName() for pv in UsdGeom.PrimvarsAPI(curves).GetPrimvars()
+                if pv.GetAttr().GetNumTimeSamples() > 0)
+            if sampled != sorted(expect["time_varying"]):
+                fail(f"{curves.GetPath()}: time-sampled primvars {sampled}, "
+                     f"expected {sorted(expect['time_varying'])}")
+    for name, checks in expect.get("frame_values", {}).items():
+        for curves in curves_prims:
+            primvar = UsdGeom.PrimvarsAPI(curves).GetPrimvar(name)
+            if not primvar or primvar.GetAttr().GetNumTimeSamples() == 0:
+                fail(f"{curves.GetPath()}: primvar {name} has no time samples")
+                continue
+            for code, kind, bound in checks:
+                if code not in primvar.GetAttr().GetTimeSamples():
+                    fail(f"{curves.GetPath()}: primvar {name} has no sample at {code}")
+                    continue
+                values = list(primvar.Get(Usd.TimeCode(code)))
+                low, high = min(values), max(values)
+                ok = low > bound if kind == "min_above" else high < bound
+                if not ok:
+                    fail(f"{curves.GetPath()}: {name} at time code {code} spans "
+                         f"{low:.4g}..{high:.4g}, expected {kind} {bound}")
+                else:
+                    print(f"     {path.name}: {name} at time code {code}: {low:.4g}..{high:.4g}")
 
     # "prims": {path: {"curves": n, "groom_guide": 0 or 1}}: the curves
     # prims a groom's guides and render strands are written to.

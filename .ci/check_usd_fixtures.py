@@ -14,6 +14,16 @@ A reading with `samples` (a file whose curveVertexCounts are time samples:
 `[{"time_code", "counts", "points"}]`, as groombake's read_sequence gives
 them) is compared at each of those time codes, and usd-core's time samples
 of counts and points must be exactly those time codes.
+A reading with `prims` (OpenUSD's own test files, tests/data/usd/openusd/)
+is compared prim by prim: the BasisCurves prims usd-core reads (counts
+authored and not empty, as many points as the counts add up to) must be
+groombake's prims, in order, with the same strand counts, counts and world
+points, and every authored width must be groombake's, value by value, at
+the points its interpolation gives it (constant: every point of the prim;
+uniform: every point of its curve; vertex, and varying on linear curves:
+its point; varying on cubic curves: the point of its segment end, point
+j * vstep for bezier and periodic curves, j + 1 for nonperiodic and pinned
+bspline and catmullRom; docs/formats.md).
 Exits 1 on a difference, and when DIR holds no reading.
 """
 import json
@@ -59,6 +69,96 @@ def usd_core_reading_at(source, code):
     return counts, points, sorted(codes)
 
 
+def readable_prims(source):
+    """usd-core's reading of every BasisCurves prim it can read: (path,
+    counts, world points, widths or None, interpolation, type, basis,
+    wrap)."""
+    stage = Usd.Stage.Open(str(source))
+    prims = []
+    time = Usd.TimeCode.Default()
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
+        if not prim.IsA(UsdGeom.BasisCurves):
+            continue
+        curves = UsdGeom.BasisCurves(prim)
+        counts = curves.GetCurveVertexCountsAttr().Get(time)
+        points = curves.GetPointsAttr().Get(time)
+        if not counts or points is None or len(points) != sum(counts):
+            continue
+        world = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(time)
+        widths = curves.GetWidthsAttr().Get(time)
+        prims.append({
+            "path": str(prim.GetPath()),
+            "counts": list(counts),
+            "points": [tuple(world.Transform(p)) for p in points],
+            "widths": list(widths) if widths is not None and len(widths) else None,
+            "interpolation": str(curves.GetWidthsInterpolation()),
+            "type": str(curves.GetTypeAttr().Get()),
+            "basis": str(curves.GetBasisAttr().Get()),
+            "wrap": str(curves.GetWrapAttr().Get()),
+        })
+    return prims
+
+
+def width_points(prim):
+    """For each authored width, the points (indices in the prim) that must
+    hold it."""
+    counts, values = prim["counts"], prim["widths"]
+    interpolation = prim["interpolation"]
+    if len(values) == 1:
+        interpolation = "constant"
+    starts = [sum(counts[:i]) for i in range(len(counts))]
+    if interpolation == "constant":
+        return [list(range(sum(counts)))]
+    if interpolation == "uniform":
+        return [list(range(s, s + n)) for s, n in zip(starts, counts)]
+    if interpolation == "vertex" or prim["type"] == "linear":
+        return [[i] for i in range(sum(counts))]
+    # Cubic varying: one per segment end.
+    vstep = 3 if prim["basis"] == "bezier" else 1
+    periodic = prim["wrap"] == "periodic"
+    out = []
+    for s, n in zip(starts, counts):
+        ends = n // vstep if periodic else max((n - 4) // vstep, 0) + 2
+        for j in range(ends):
+            k = j * vstep if (vstep == 3 or periodic) else j + 1
+            out.append([s + min(k, n - 1)])
+    return out
+
+
+def prim_difference(source, mine):
+    theirs = readable_prims(source)
+    paths = [p["path"] for p in theirs]
+    mine_paths = [p for p, _ in mine["prims"]]
+    if paths != mine_paths:
+        return f"prims: usd-core {paths}, groombake {mine_paths}"
+    strands = [len(p["counts"]) for p in theirs]
+    mine_strands = [n for _, n in mine["prims"]]
+    if strands != mine_strands:
+        return f"strands per prim: usd-core {strands}, groombake {mine_strands}"
+    counts = [c for p in theirs for c in p["counts"]]
+    points = [x for p in theirs for x in p["points"]]
+    problem = difference(counts, points, mine["counts"], mine["points"])
+    if problem:
+        return problem
+    start = 0
+    compared = 0
+    for prim in theirs:
+        if prim["widths"] is not None:
+            if mine["widths"] is None:
+                return f"{prim['path']}: usd-core reads widths, groombake none"
+            groups = width_points(prim)
+            if len(groups) != len(prim["widths"]):
+                return f"{prim['path']}: {len(prim['widths'])} widths, {len(groups)} places"
+            for value, group in zip(prim["widths"], groups):
+                for index in group:
+                    got = mine["widths"][start + index]
+                    if not math.isclose(value, got, rel_tol=1e-6, abs_tol=1e-7):
+                        return f"{prim['path']}: width at point {index}: usd-core {value}, groombake {got}"
+                    compared += 1
+        start += sum(prim["counts"])
+    return compared
+
+
 def difference(counts, points, mine_counts, mine_points):
     """What differs between usd-core's reading and groombake's, or None."""
     if counts != mine_counts:
@@ -101,6 +201,15 @@ def main():
             else:
                 print(f"ok   {name}: counts and points at time codes {mine_codes} "
                       "as usd-core reads them")
+            continue
+        if "prims" in mine:
+            problem = prim_difference(mine["source"], mine)
+            if isinstance(problem, str):
+                failures += 1
+                print(f"FAIL {name}: {problem}")
+            else:
+                print(f"ok   {name}: {len(mine['prims'])} prims, {len(mine['counts'])} curves, "
+                      f"{len(mine['points'])} points and {problem} width places as usd-core reads them")
             continue
         counts, points = usd_core_reading(mine["source"])
         problem = difference(counts, points, mine["counts"], mine["points"])

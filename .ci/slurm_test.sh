@@ -2,6 +2,8 @@
 # The farm path on a real scheduler: a one-node Slurm (this host) runs the
 # job array that `groombake batch MANIFEST --emit slurm` writes, and its
 # outputs must be byte-identical to `groombake batch MANIFEST --jobs 2`.
+# Then one task alone (`sbatch --array=3`, as a TD resubmits a failed or
+# deleted job) must bake job 3 again, byte-identical, and merge.
 #
 # Usage: .ci/slurm_test.sh GROOMBAKE_BINARY
 # Needs root (slurmctld and slurmd run as root). Installs Debian's slurm-wlm
@@ -77,7 +79,7 @@ MpiDefault=none
 ReturnToService=2
 SlurmctldTimeout=30
 SlurmdTimeout=30
-NodeName=$host CPUs=$(nproc) State=UNKNOWN
+NodeName=$host CPUs=$(nproc) RealMemory=$(free -m | awk '/^Mem:/ {print $2}') State=UNKNOWN
 PartitionName=ci Nodes=$host Default=YES MaxTime=INFINITE State=UP
 CONF
 slurmctld -c -f "$SLURM_CONF" -i
@@ -112,21 +114,24 @@ done
 echo "== local: groombake batch local.toml --jobs 2"
 "$exe" batch local.toml --jobs 2 -q
 
-echo "== farm: groombake batch farm.toml --emit slurm > bake.sbatch; sbatch bake.sbatch"
-"$exe" batch farm.toml --emit slurm > bake.sbatch
+echo "== farm: groombake batch farm.toml --emit slurm --time 00:30:00 --mem 1G --partition ci > bake.sbatch; sbatch bake.sbatch"
+"$exe" batch farm.toml --emit slurm --time 00:30:00 --mem 1G --partition ci > bake.sbatch
 grep '^#SBATCH' bake.sbatch
 array=$(sbatch --parsable bake.sbatch)
 echo "submitted array job $array"
 squeue -a -o '%.18i %.12j %.8T %.10M %R' || true
 
 # Wait (bounded) until the array and its merge have left the queue.
-deadline=$(( $(date +%s) + ${GROOMBAKE_SLURM_TIMEOUT:-900} ))
-while [ -n "$(squeue -h -a -o %i 2>/dev/null)" ]; do
-  if [ "$(date +%s)" -gt "$deadline" ]; then
-    echo "timed out waiting for the array"; squeue -a; tail -30 "$work/slurmctld.log"; exit 1
-  fi
-  sleep 2
-done
+wait_for_queue() {
+  local deadline=$(( $(date +%s) + ${GROOMBAKE_SLURM_TIMEOUT:-900} ))
+  while [ -n "$(squeue -h -a -o %i 2>/dev/null)" ]; do
+    if [ "$(date +%s)" -gt "$deadline" ]; then
+      echo "timed out waiting for the array"; squeue -a; tail -30 "$work/slurmctld.log"; exit 1
+    fi
+    sleep 2
+  done
+}
+wait_for_queue
 
 echo "== completed jobs (jobcomp log: one line per job and array task)"
 cat "$work/jobcomp.log"
@@ -139,6 +144,9 @@ for log in farm/slurm/*.log; do echo "-- $log"; head -3 "$log"; done
 
 status=0
 [ "$tasks" -eq 12 ] && [ "$ok_tasks" -eq 12 ] || { echo "expected 12 completed array tasks"; status=1; }
+# The script's requests reached the scheduler (TimeLimit in minutes).
+limited=$(grep -c " Name=groombake .* Partition=ci TimeLimit=30 .* ArrayJobId=$array " "$work/jobcomp.log" || true)
+[ "$limited" -eq 12 ] || { echo "expected 12 tasks on partition ci with a 30-minute limit, got $limited"; status=1; }
 [ "$merges" -eq 1 ] || { echo "expected one completed merge job"; status=1; }
 [ -f farm/batch_report.json ] || { echo "no merged report farm/batch_report.json"; status=1; }
 grep -q '"succeeded": 12' farm/batch_report.json || { echo "the merged report does not list 12 succeeded jobs"; status=1; }
@@ -154,5 +162,29 @@ extra=$(find farm -type f ! -name groombake_job.json ! -name batch_report.json !
 [ "$extra" -eq "$compared" ] || { echo "farm has $extra outputs, local $compared"; status=1; }
 echo "compared $compared output files byte for byte"
 [ "$compared" -ge 24 ] || { echo "too few outputs"; status=1; }
+
+# Job 3 (blow_dry-g4: the manifest's globs in order, grooms sorted) deleted
+# and baked again by a resubmit of its task alone.
+echo "== single-task resubmit: rm -r farm/blow_dry-g4; sbatch --array=3 bake.sbatch"
+rm -r farm/blow_dry-g4 farm/batch_report.json
+single=$(sbatch --parsable --array=3 bake.sbatch)
+echo "submitted array job $single (task 3 only)"
+wait_for_queue
+grep " ArrayJobId=$single " "$work/jobcomp.log" || true
+single_ok=$(grep -c " Name=groombake JobState=COMPLETED .* ArrayJobId=$single ArrayTaskId=3 DerivedExitCode=0:0 ExitCode=0:0" "$work/jobcomp.log" || true)
+merges=$(grep -c " Name=groombake-merge JobState=COMPLETED .* ExitCode=0:0" "$work/jobcomp.log" || true)
+echo "task 3 completed: $single_ok; merge jobs completed: $merges"
+[ "$single_ok" -eq 1 ] || { echo "the resubmitted task 3 did not complete"; status=1; }
+[ "$merges" -eq 2 ] || { echo "the resubmitted task did not merge the reports"; status=1; }
+grep -q '"succeeded": 12' farm/batch_report.json 2>/dev/null || { echo "after the resubmit the merged report does not list 12 succeeded jobs"; status=1; }
+resubmitted=0
+while IFS= read -r -d '' file; do
+  rel=${file#local/}
+  if ! cmp -s "$file" "farm/$rel"; then echo "DIFFERS after the resubmit: $rel"; status=1; fi
+  resubmitted=$((resubmitted + 1))
+done < <(find local/blow_dry-g4 -type f ! -name groombake_job.json -print0 | sort -z)
+echo "compared $resubmitted output files of the resubmitted job byte for byte"
+[ "$resubmitted" -ge 2 ] || { echo "too few outputs of the resubmitted job"; status=1; }
+
 [ "$status" = 0 ] && echo "SLURM TEST PASSED" || echo "SLURM TEST FAILED"
 exit "$status"

@@ -43,6 +43,7 @@ fn frames(groom: &Groom) -> Vec<Frame> {
                 .iter()
                 .map(|p| [p[0] + 0.1 * (f as f32 * 0.3).sin(), p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect()
 }

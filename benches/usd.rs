@@ -62,6 +62,7 @@ fn bench(c: &mut Criterion) {
                 .iter()
                 .map(|p| [p[0] + i as f32 * 1e-3, p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     group.throughput(Throughput::Elements(vertices * frames.len() as u64));

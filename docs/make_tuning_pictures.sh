@@ -36,7 +36,7 @@ shot() {
   } > "$work/$name.toml"
   "$bin" bake "$work/$name.toml" --out "$work/$name" -q
   "$bin" preview "$work/$name/anim.glb" --frames "$frames" --view "$view" \
-    --size 150x150 -o "docs/img/tune_$name.png"
+    --panel-size 150x150 -o "docs/img/tune_$name.png"
   echo "docs/img/tune_$name.png ($(( $(date +%s) - start )) s)"
 }
 

@@ -77,6 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .iter()
                 .map(|p| [p[0] - 0.4 * f as f32 * p[1], p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let labels = ["frame 0", "frame 1", "frame 2"];

@@ -17,6 +17,6 @@ mkdir -p samples/img
 for timeline in samples/*.toml; do
   name=$(basename "$timeline" .toml)
   start=$(date +%s)
-  "$bin" preview "$timeline" -o "samples/img/$name.png" --size 320x320
+  "$bin" preview "$timeline" -o "samples/img/$name.png" --panel-size 320x320
   echo "samples/img/$name.png ($(( $(date +%s) - start )) s)"
 done

@@ -5,18 +5,25 @@
 //!
 //! A job report is written last and atomically, so a job whose report is
 //! present with the hashes of the files on disk is complete: `resume`
-//! skips it. A failing job (bad input, a failed bake, a panic) is recorded
+//! skips it, unless anything its outputs depend on changed since
+//! ([`inputs`]: the timeline, the files it reads, the seed, groombake's
+//! version); then it bakes the job again and says why. A failing job (bad input, a failed bake, a panic) is recorded
 //! as failed and the others go on. Shards (`I/N`: jobs `I, I+N, ...`) let
-//! a farm's array tasks split the jobs; a final `merge` gathers them.
+//! a farm's array tasks split the jobs ([`slurm`]); a final `merge` gathers them.
+
+pub mod inputs;
+pub mod slurm;
 
 use crate::timeline::bake::{bake, BakeOptions};
 use crate::timeline::report::size_and_sha256;
 use crate::timeline::{Timeline, TimelineError};
+use inputs::JobInputs;
 use serde::{Deserialize, Serialize};
 use serde_spanned::Spanned;
+use slurm::SlurmSettings;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// The report every job leaves in its folder.
@@ -36,6 +43,8 @@ struct ManifestFile {
     jobs: Vec<Spanned<JobSpec>>,
     #[serde(default, rename = "glob")]
     globs: Vec<Spanned<GlobSpec>>,
+    /// Scheduler requests of the emitted farm script.
+    slurm: Option<Spanned<SlurmSettings>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -48,6 +57,8 @@ struct JobSpec {
     groom: Option<String>,
     /// The job's folder, instead of `<out>/<name>`.
     out: Option<String>,
+    /// Overrides the timeline's seed.
+    seed: Option<u64>,
 }
 
 /// One job per groom file matching `grooms`, each with `timeline`.
@@ -56,6 +67,8 @@ struct JobSpec {
 struct GlobSpec {
     timeline: String,
     grooms: String,
+    /// Overrides the timeline's seed.
+    seed: Option<u64>,
 }
 
 /// One job of a manifest, its paths resolved.
@@ -65,6 +78,8 @@ pub struct Job {
     pub timeline: PathBuf,
     pub groom: Option<PathBuf>,
     pub folder: PathBuf,
+    /// Overrides the timeline's seed.
+    pub seed: Option<u64>,
 }
 
 /// A read manifest: its jobs in order.
@@ -75,6 +90,8 @@ pub struct Manifest {
     pub out: PathBuf,
     pub threads: Option<usize>,
     pub jobs: Vec<Job>,
+    /// The `[slurm]` table (checked).
+    pub slurm: SlurmSettings,
 }
 
 /// What went wrong with a manifest (bad input: exit code 2).
@@ -100,6 +117,8 @@ pub enum JobStatus {
     Failed,
     /// No report found (a merge of shards that did not all run).
     Missing,
+    /// Stopped by a signal while it ran, or never started because of one.
+    Interrupted,
 }
 
 /// The report of one job (also the entry of the merged report).
@@ -115,6 +134,13 @@ pub struct JobReport {
     pub outputs: Vec<JobOutput>,
     /// The bake's own report (`bake --report`), when it ran.
     pub bake: Option<serde_json::Value>,
+    /// What the outputs depend on (absent in reports of older versions,
+    /// and when the timeline could not be read).
+    #[serde(default)]
+    pub inputs: Option<JobInputs>,
+    /// Why `resume` baked a job again that had a complete report.
+    #[serde(default)]
+    pub rebaked_because: Option<String>,
 }
 
 /// The merged report of a batch.
@@ -146,6 +172,21 @@ pub struct BatchOptions {
     pub resume: bool,
     /// Worker threads of each bake (overrides the manifest's).
     pub threads: Option<usize>,
+    /// A request to stop, shared with the CLI's signal handlers: 0 while
+    /// the batch may run, else the signal's number. Running bakes stop at
+    /// their next step (removing their temporaries), no further job
+    /// starts, and every job not finished is reported `interrupted`.
+    pub stop: Option<Arc<AtomicUsize>>,
+}
+
+impl BatchOptions {
+    /// The signal that asked the batch to stop, if one did.
+    pub fn stopped_by(&self) -> Option<usize> {
+        self.stop
+            .as_ref()
+            .map(|s| s.load(Ordering::Relaxed))
+            .filter(|&s| s != 0)
+    }
 }
 
 fn manifest_error(
@@ -185,9 +226,17 @@ impl Manifest {
     /// Reads a manifest and expands its globs; every job's timeline and
     /// groom must exist and names must be unique.
     pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            manifest_error(path, "", 0..0, format!("cannot read the manifest: {e}"))
-        })?;
+        let read = |message: String| {
+            manifest_error(
+                path,
+                "",
+                0..0,
+                format!("cannot read the manifest: {message}"),
+            )
+        };
+        let bytes = importers::read_limited(path, crate::budget::MAX_TIMELINE_BYTES)
+            .map_err(|e| read(e.to_string()))?;
+        let text = String::from_utf8(bytes).map_err(|e| read(format!("not UTF-8 text ({e})")))?;
         let file: ManifestFile = toml::from_str(&text).map_err(|e| {
             let span = e.span().unwrap_or(0..0);
             manifest_error(path, &text, span, e.message().trim().to_string())
@@ -200,6 +249,13 @@ impl Manifest {
         if file.threads == Some(0) {
             return Err(fail(0..0, "threads must be at least 1".into()));
         }
+        let slurm = match &file.slurm {
+            Some(table) => {
+                table.get_ref().check().map_err(|m| fail(table.span(), m))?;
+                table.get_ref().clone()
+            }
+            None => SlurmSettings::default(),
+        };
         let mut jobs: Vec<(Job, std::ops::Range<usize>)> = Vec::new();
         for spec in &file.jobs {
             let span = spec.span();
@@ -220,6 +276,7 @@ impl Manifest {
                     timeline,
                     groom,
                     folder,
+                    seed: spec.seed,
                 },
                 span,
             ));
@@ -248,6 +305,7 @@ impl Manifest {
                         timeline: timeline.clone(),
                         groom: Some(g),
                         folder,
+                        seed: spec.seed,
                     },
                     span.clone(),
                 ));
@@ -286,6 +344,7 @@ impl Manifest {
             out,
             threads: file.threads,
             jobs: jobs.into_iter().map(|(job, _)| job).collect(),
+            slurm,
         })
     }
 
@@ -329,18 +388,30 @@ fn output_path(job: &Job, relative: &str) -> PathBuf {
     }
 }
 
-/// A report of a complete earlier run whose outputs are all on disk with
-/// the same hashes.
-fn completed_earlier(job: &Job) -> Option<JobReport> {
-    let report = read_job_report(job)?;
+/// The report of a complete earlier run whose outputs are all on disk
+/// with the same hashes and whose inputs are `current`; else why the job
+/// must bake (`None`: it has no complete earlier run).
+fn completed_earlier(job: &Job, current: Option<&JobInputs>) -> Result<JobReport, Option<String>> {
+    let report = read_job_report(job).ok_or(None)?;
     if !matches!(report.status, JobStatus::Ok | JobStatus::Skipped) {
-        return None;
+        return Err(None);
     }
-    let intact = report.outputs.iter().all(|o| {
-        size_and_sha256(&output_path(job, &o.path))
+    if let Some(o) = report.outputs.iter().find(|o| {
+        !size_and_sha256(&output_path(job, &o.path))
             .is_ok_and(|(bytes, sha)| bytes == o.bytes && sha == o.sha256)
-    });
-    intact.then_some(report)
+    }) {
+        return Err(Some(format!("the output '{}' changed", o.path)));
+    }
+    // Without the current inputs the bake reports why it cannot run.
+    let current = current.ok_or(None)?;
+    let recorded = report
+        .inputs
+        .as_ref()
+        .ok_or_else(|| Some("its report records no inputs".to_string()))?;
+    match inputs::change(recorded, current) {
+        Some(reason) => Err(Some(reason)),
+        None => Ok(report),
+    }
 }
 
 fn write_json(path: &Path, value: &impl Serialize) -> std::io::Result<()> {
@@ -353,12 +424,8 @@ fn write_json(path: &Path, value: &impl Serialize) -> std::io::Result<()> {
     file.commit()
 }
 
-/// Loads the job's timeline with its groom override and bakes it into the
-/// job's folder; returns the bake's report as JSON and the outputs.
-fn bake_job(
-    job: &Job,
-    threads: Option<usize>,
-) -> Result<(serde_json::Value, Vec<JobOutput>), String> {
+/// Loads the job's timeline with the manifest's groom in place of its own.
+fn load_timeline(job: &Job) -> Result<Timeline, String> {
     let mut timeline = Timeline::load(&job.timeline).map_err(|e| e.to_string())?;
     if let Some(groom) = &job.groom {
         let absolute =
@@ -366,13 +433,31 @@ fn bake_job(
         timeline.file.groom.source = Some(Spanned::new(0..0, absolute.display().to_string()));
         timeline.file.groom.generate = None;
     }
+    Ok(timeline)
+}
+
+/// Bakes the job's timeline into the job's folder; returns the bake's
+/// report as JSON and the outputs.
+fn bake_job(
+    job: &Job,
+    timeline: &Timeline,
+    threads: Option<usize>,
+    stop: Option<&Arc<AtomicUsize>>,
+) -> Result<(serde_json::Value, Vec<JobOutput>), String> {
     let options = BakeOptions {
         out_dir: job.folder.clone(),
         threads,
-        seed: None,
+        seed: job.seed,
+        monitor: stop.map(|stop| {
+            Arc::new(crate::timeline::bake::BakeMonitor {
+                stop: stop.clone(),
+                ..Default::default()
+            })
+        }),
         ..BakeOptions::default()
     };
-    let report = bake(&timeline, &options).map_err(|e| e.to_string())?.report;
+    let mut report = bake(timeline, &options).map_err(|e| e.to_string())?.report;
+    report.finish_ok(timeline);
     let outputs = report
         .outputs
         .iter()
@@ -410,25 +495,40 @@ fn remove_leftovers(folder: &Path) {
 
 /// Runs one job (or finds it complete) and writes its report.
 pub fn run_job(job: &Job, options: &BatchOptions, threads: Option<usize>) -> JobReport {
+    let started = Instant::now();
+    // Read before baking: a file changed during the bake then differs from
+    // what the report records, and the next resume bakes again.
+    let timeline = load_timeline(job);
+    let current = timeline
+        .as_ref()
+        .ok()
+        .and_then(|t| inputs::current(job, t).ok());
+    let mut rebaked_because = None;
     if options.resume {
-        if let Some(mut report) = completed_earlier(job) {
-            report.status = JobStatus::Skipped;
-            return report;
+        match completed_earlier(job, current.as_ref()) {
+            Ok(mut report) => {
+                report.status = JobStatus::Skipped;
+                report.rebaked_because = None;
+                return report;
+            }
+            Err(reason) => rebaked_because = reason,
         }
     }
-    let started = Instant::now();
     // An old report must not vouch for outputs this run may leave half done.
     let _ = std::fs::remove_file(job_report_path(job));
     remove_leftovers(&job.folder);
-    let outcome = std::fs::create_dir_all(&job.folder)
-        .map_err(|e| format!("{}: {e}", job.folder.display()))
-        .and_then(|()| {
-            // A panic in one bake must not end the others.
-            std::panic::catch_unwind(|| bake_job(job, threads))
-                .unwrap_or_else(|_| Err("the bake panicked".into()))
-        });
+    let outcome = timeline.and_then(|timeline| {
+        std::fs::create_dir_all(&job.folder)
+            .map_err(|e| format!("{}: {e}", job.folder.display()))?;
+        // A panic in one bake must not end the others.
+        std::panic::catch_unwind(|| bake_job(job, &timeline, threads, options.stop.as_ref()))
+            .unwrap_or_else(|_| Err("the bake panicked".into()))
+    });
     let (status, error, bake, outputs) = match outcome {
         Ok((bake, outputs)) => (JobStatus::Ok, None, Some(bake), outputs),
+        Err(message) if options.stopped_by().is_some() => {
+            (JobStatus::Interrupted, Some(message), None, Vec::new())
+        }
         Err(message) => (JobStatus::Failed, Some(message), None, Vec::new()),
     };
     let mut report = JobReport {
@@ -441,6 +541,8 @@ pub fn run_job(job: &Job, options: &BatchOptions, threads: Option<usize>) -> Job
         wall_seconds: started.elapsed().as_secs_f64(),
         outputs,
         bake,
+        inputs: current,
+        rebaked_because,
     };
     if let Err(e) = write_json(&job_report_path(job), &report) {
         report.status = JobStatus::Failed;
@@ -469,6 +571,9 @@ pub fn run(
     std::thread::scope(|scope| {
         for _ in 0..parallel {
             scope.spawn(|| loop {
+                if options.stopped_by().is_some() {
+                    break;
+                }
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&index) = selected.get(k) else { break };
                 let report = run_job(&manifest.jobs[index], options, Some(threads));
@@ -479,12 +584,38 @@ pub fn run(
             });
         }
     });
-    reports
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-        .collect()
+    let slots = reports.into_inner().unwrap_or_default();
+    match options.stopped_by() {
+        // Every selected job is in the report: those a signal kept from
+        // starting too.
+        Some(signal) => slots
+            .into_iter()
+            .zip(&selected)
+            .map(|(slot, &index)| {
+                slot.unwrap_or_else(|| not_started(&manifest.jobs[index], signal))
+            })
+            .collect(),
+        None => slots.into_iter().flatten().collect(),
+    }
+}
+
+/// The report of a job a signal kept from starting.
+fn not_started(job: &Job, signal: usize) -> JobReport {
+    JobReport {
+        name: job.name.clone(),
+        timeline: job.timeline.display().to_string(),
+        groom: job.groom.as_ref().map(|g| g.display().to_string()),
+        folder: job.folder.display().to_string(),
+        status: JobStatus::Interrupted,
+        error: Some(format!(
+            "not started: the batch was stopped by signal {signal}"
+        )),
+        wall_seconds: 0.0,
+        outputs: Vec::new(),
+        bake: None,
+        inputs: None,
+        rebaked_because: None,
+    }
 }
 
 /// The merged report of every job of the manifest: the reports of this
@@ -508,6 +639,8 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
                     wall_seconds: 0.0,
                     outputs: Vec::new(),
                     bake: None,
+                    inputs: None,
+                    rebaked_because: None,
                 })
         })
         .collect();
@@ -516,7 +649,7 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
         manifest: manifest.path.display().to_string(),
         groombake_version: env!("CARGO_PKG_VERSION").to_string(),
         succeeded: count(JobStatus::Ok) + count(JobStatus::Skipped),
-        failed: count(JobStatus::Failed),
+        failed: count(JobStatus::Failed) + count(JobStatus::Interrupted),
         missing: count(JobStatus::Missing),
         jobs,
         wall_seconds,
@@ -527,51 +660,25 @@ pub fn merge(manifest: &Manifest, fresh: &[JobReport], wall_seconds: f64) -> Bat
 /// beside it the same as an HTML page ([`MERGED_REPORT`] with `.html`).
 pub fn write_merged(manifest: &Manifest, report: &BatchReport) -> std::io::Result<PathBuf> {
     let path = manifest.out.join(MERGED_REPORT);
+    // Temporaries of killed batches writing these reports go first.
+    crate::timeline::outputs::remove_stale_temporaries(&[
+        path.clone(),
+        path.with_extension("html"),
+    ]);
     write_json(&path, report)?;
     let mut html = groom::AtomicFile::create(&path.with_extension("html"))?;
-    std::io::Write::write_all(&mut html, crate::report_html::batch_page(report).as_bytes())?;
+    let page = crate::report_html::batch_page(report, &manifest.out);
+    std::io::Write::write_all(&mut html, page.as_bytes())?;
     html.commit()?;
     Ok(path)
 }
 
-/// Quotes a word for a POSIX shell.
-fn shell_quote(text: &str) -> String {
-    format!("'{}'", text.replace('\'', r"'\''"))
-}
-
-/// A Slurm job-array script: task `i` of `K + 1` runs shard `i/K+1` of the
-/// manifest; task 0 also submits the merge, which waits for the whole array.
-/// `sbatch` it as it is.
-pub fn slurm_script(manifest: &Manifest, executable: &Path, threads: usize) -> String {
-    let exe = shell_quote(&executable.display().to_string());
-    let path = std::path::absolute(&manifest.path).unwrap_or_else(|_| manifest.path.clone());
-    let out = std::path::absolute(&manifest.out).unwrap_or_else(|_| manifest.out.clone());
-    let manifest_arg = shell_quote(&path.display().to_string());
-    let logs = shell_quote(&out.join("slurm").display().to_string());
-    let last = manifest.jobs.len().saturating_sub(1);
-    format!(
-        r#"#!/bin/bash
-# groombake batch of {manifest}: {jobs} job(s) as a Slurm job array.
-# Submit with `sbatch THIS_FILE`; task 0 submits the merge of the reports,
-# which runs when every task has ended.
-#SBATCH --job-name=groombake
-#SBATCH --array=0-{last}
-#SBATCH --ntasks=1
-#SBATCH --cpus-per-task={threads}
-#SBATCH --output={log_dir}/groombake-%A_%a.log
-set -euo pipefail
-exe={exe}
-manifest={manifest_arg}
-if [ "$SLURM_ARRAY_TASK_ID" = "0" ]; then
-  echo "merge job: $(sbatch --parsable --job-name=groombake-merge --dependency="afterany:$SLURM_ARRAY_JOB_ID" \
-    --output={logs}/groombake-merge-%j.log \
-    --wrap="$(printf '%q ' "$exe" batch "$manifest" --merge)")"
-fi
-exec "$exe" batch "$manifest" --threads {threads} \
-  --shard "$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT"
-"#,
-        manifest = path.display(),
-        jobs = manifest.jobs.len(),
-        log_dir = out.join("slurm").display(),
-    )
+/// The Slurm job-array script of the manifest ([`slurm::script`]).
+pub fn slurm_script(
+    manifest: &Manifest,
+    executable: &Path,
+    threads: usize,
+    settings: &SlurmSettings,
+) -> String {
+    slurm::script(manifest, executable, threads, settings)
 }

@@ -51,6 +51,9 @@ pub struct Workload {
     pub tolerance: f32,
     /// `alpha` of the hair-hair penalty (20); `None` leaves it off.
     pub hair_hair: Option<f32>,
+    /// Coulomb friction between hairs with pairwise hair-hair (physical
+    /// model; `SolverParameters::hair_friction`); `None`: frictionless.
+    pub hair_friction: Option<f32>,
     /// Volumetric hair-hair (replaces the pairwise penalty when set).
     pub volumetric: Option<crate::sim::Volumetric>,
     pub collider: HeadCollider,
@@ -145,6 +148,7 @@ impl Workload {
             iterations: Model::Physical.default_iterations(),
             tolerance: Model::Physical.default_tolerance(),
             hair_hair: None,
+            hair_friction: None,
             volumetric: None,
             collider: HeadCollider::None,
             render: None,
@@ -256,6 +260,7 @@ impl Workload {
             iterations: self.iterations,
             tolerance: self.tolerance,
             hair_hair_strength: self.hair_hair,
+            hair_friction: self.hair_friction,
             volumetric: self.volumetric,
             ..SolverParameters::default()
         })?;
@@ -359,6 +364,7 @@ impl Delivery {
                 .write_frame(&groom::Frame {
                     time: self.frames as f64 / EXPORT_FPS,
                     points,
+                    attributes: Vec::new(),
                 })
                 .map_err(|e| BenchError::Input(e.to_string()))?;
         }
@@ -697,9 +703,15 @@ mod tests {
 
     /// Positions after 30 steps on the mesh head on `threads` threads.
     fn positions_bits(threads: usize, hair_hair: Option<f32>) -> Vec<u32> {
+        positions_bits_with(threads, hair_hair, None)
+    }
+
+    /// [`positions_bits`] with Coulomb friction between hairs `mu`.
+    fn positions_bits_with(threads: usize, hair_hair: Option<f32>, mu: Option<f32>) -> Vec<u32> {
         let workload = Workload {
             iterations: 5,
             hair_hair,
+            hair_friction: mu,
             collider: HeadCollider::Mesh(
                 concat!(env!("CARGO_MANIFEST_DIR"), "/samples/head.obj").into(),
             ),
@@ -768,6 +780,17 @@ mod tests {
         assert_eq!(one, positions_bits(3, Some(5.0)));
         // Hair touched hair: the penalty changed the result.
         assert_ne!(one, positions_bits(1, None));
+    }
+
+    /// Friction between hairs (issue 33): contacts found from the state at
+    /// the start of the step, each strand solved against the others as
+    /// kinematic targets, so no result depends on the thread count.
+    #[test]
+    fn hair_friction_on_a_mesh_head_is_bit_identical_for_any_thread_count() {
+        let one = positions_bits_with(1, Some(5.0), Some(0.3));
+        assert_eq!(one, positions_bits_with(3, Some(5.0), Some(0.3)));
+        // The contacts acted: friction changed the result.
+        assert_ne!(one, positions_bits(1, Some(5.0)));
     }
 
     #[test]

@@ -20,6 +20,18 @@ pub const MAX_FRAMES: u64 = 1_000_000;
 pub const MAX_OUTPUT_BYTES: u64 = 64 << 30;
 /// Worker threads.
 pub const MAX_THREADS: usize = 1024;
+/// Cell-triangle entries of a collider mesh's distance grid (8 bytes each
+/// while it is built: 512 MB; a mesh of small triangles lists a few
+/// hundred per triangle).
+pub const MAX_GRID_ENTRIES: u64 = 64_000_000;
+/// The largest coordinate of a scene, metres (a collider mesh's vertex
+/// after its scale, a groom's translation): past 10 km an f32 position
+/// resolves 1 mm, far coarser than a hair (50 to 100 micrometres).
+pub const MAX_COORDINATE: f64 = 1e4;
+/// Bytes of a timeline or batch manifest (a long timeline is a few KB).
+pub const MAX_TIMELINE_BYTES: u64 = 16 << 20;
+/// Bytes of an input file read whole (a groom, a collider mesh).
+pub const MAX_INPUT_BYTES: u64 = importers::MAX_FILE_BYTES;
 /// The smallest time step, seconds.
 pub const MIN_DT: f64 = 1e-6;
 
@@ -62,6 +74,19 @@ pub fn check_output(frames: u64, vertices: u64) -> Result<(), String> {
             "{frames} frames of {vertices} vertices are more than {} GiB",
             MAX_OUTPUT_BYTES >> 30
         )),
+    }
+}
+
+/// A collider grid of `entries` cell-triangle entries for `triangles`
+/// triangles, if within the budget.
+pub fn check_grid_entries(entries: u64, triangles: u64) -> Result<(), String> {
+    if entries <= MAX_GRID_ENTRIES {
+        Ok(())
+    } else {
+        Err(format!(
+            "the distance grid of {triangles} triangles needs {entries} cell entries, more than \
+             {MAX_GRID_ENTRIES} (a few triangles far larger than the rest?)"
+        ))
     }
 }
 

@@ -306,6 +306,55 @@ fn compare_attributes(
     }
 }
 
+/// Compares two files read as sequences of topologies (a USD file whose
+/// curve counts change over time is one groom per stretch of time): stretch
+/// by stretch, when both have as many; a different number of stretches is
+/// a structural difference. One groom each is [`diff`].
+pub fn diff_sequences(a: &[Groom], b: &[Groom], options: &DiffOptions) -> DiffReport {
+    if let ([a], [b]) = (a, b) {
+        return diff(a, b, options);
+    }
+    let mut total = DiffReport {
+        equal: a.len() == b.len(),
+        tolerance: options.tolerance,
+        structural: Vec::new(),
+        compared: 0,
+        above_tolerance: 0,
+        max_deviation: 0.0,
+        largest: Vec::new(),
+    };
+    if a.len() != b.len() {
+        total.structural.push(format!(
+            "topologies: A has {} stretches of time with their own curve counts, B {}",
+            a.len(),
+            b.len()
+        ));
+        return total;
+    }
+    for (index, (a, b)) in a.iter().zip(b).enumerate() {
+        let report = diff(a, b, options);
+        total.equal &= report.equal;
+        total.structural.extend(
+            report
+                .structural
+                .into_iter()
+                .map(|s| format!("topology {index}: {s}")),
+        );
+        total.compared += report.compared;
+        total.above_tolerance += report.above_tolerance;
+        total.max_deviation = total.max_deviation.max(report.max_deviation);
+        total
+            .largest
+            .extend(report.largest.into_iter().map(|mut d| {
+                d.what = format!("topology {index}: {}", d.what);
+                d
+            }));
+    }
+    total.largest.sort_by(|x, y| y.amount.total_cmp(&x.amount));
+    total.largest.truncate(options.listed);
+    total
+}
+
 /// Compares two grooms in metres, Y up (each converted from its own units
 /// and up axis).
 pub fn diff(a: &Groom, b: &Groom, options: &DiffOptions) -> DiffReport {
@@ -363,6 +412,7 @@ mod tests {
             .map(|k| Frame {
                 time: k as f64 / 24.0,
                 points: g.points.clone(),
+                attributes: Vec::new(),
             })
             .collect();
         g

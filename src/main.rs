@@ -6,6 +6,15 @@ mod cli;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // A file past the size limit (`ulimit -f`) fails its write with EFBIG,
+    // as a full disk fails with ENOSPC, instead of killing the process by
+    // SIGXFSZ: the error path then removes the temporaries, as a bake's,
+    // a convert's or a batch's.
+    // SAFETY: setting a signal's disposition to "ignore" before any thread
+    // starts; no handler runs.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let args = match cli::parse() {
         Ok(args) => args,
         Err(code) => return code,

@@ -3,11 +3,15 @@
 //! embedded as base64 PNG, plots as inline SVG; the page loads nothing.
 
 use crate::batch::{BatchReport, JobStatus};
-use crate::sim::attribute_names::{BOND_RATES, WETNESS};
+use crate::sim::attribute_names::BOND_RATES;
+use crate::timeline::plots::PlotSample;
 use crate::timeline::report::BakeReport;
 use base64::Engine;
-use groom::{AttributeValues, Groom};
 use std::fmt::Write;
+use std::path::Path;
+
+mod links;
+pub use links::relative_href;
 
 /// Text made safe for HTML.
 fn escape(text: &str) -> String {
@@ -36,7 +40,7 @@ const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:24px;color:#
 h1{font-size:22px}h2{font-size:17px;margin-top:28px}\
 table{border-collapse:collapse;background:#fff}td,th{border:1px solid #ccc;padding:4px 8px;text-align:left;vertical-align:middle}\
 th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums}code{font-size:12px}\
-.ok{color:#176f2c;font-weight:600}.skipped{color:#2458a6;font-weight:600}.failed,.missing{color:#b00020;font-weight:600}\
+.ok{color:#176f2c;font-weight:600}.skipped{color:#2458a6;font-weight:600}.failed,.missing,.interrupted{color:#b00020;font-weight:600}\
 .plots{display:flex;flex-wrap:wrap;gap:16px}svg{background:#fff;border:1px solid #ccc}img.sheet{max-width:100%;border:1px solid #ccc}";
 
 fn page(title: &str, body: &str) -> String {
@@ -48,10 +52,12 @@ fn page(title: &str, body: &str) -> String {
     )
 }
 
-/// One curve of a plot: its name, colour and points (x, y).
+/// One curve of a plot: its name, colour, dash pattern (SVG
+/// `stroke-dasharray`, empty for a solid line) and points (x, y).
 pub struct Series {
     pub name: String,
     pub color: &'static str,
+    pub dash: &'static str,
     pub points: Vec<(f64, f64)>,
 }
 
@@ -118,29 +124,40 @@ pub fn svg_plot(title: &str, x_label: &str, series: &[Series]) -> String {
             .filter(|p| p.0.is_finite() && p.1.is_finite())
             .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
             .collect();
+        // Curves that coincide (bonds intact together) stay told apart by
+        // their dashes; the legend draws each dash.
+        let dash = if s.dash.is_empty() {
+            String::new()
+        } else {
+            format!(" stroke-dasharray=\"{}\"", s.dash)
+        };
         let _ = write!(
             svg,
-            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\" points=\"{p}\"/>",
+            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"2\"{dash} points=\"{p}\"/>",
             c = s.color,
             p = points.join(" ")
         );
-        for p in &points {
-            if let Some((x, y)) = p.split_once(',') {
-                let _ = write!(
-                    svg,
-                    "<circle cx=\"{x}\" cy=\"{y}\" r=\"2.5\" fill=\"{}\"/>",
-                    s.color
-                );
+        // Points only where they are few enough to read as samples.
+        if points.len() <= 12 {
+            for p in &points {
+                if let Some((x, y)) = p.split_once(',') {
+                    let _ = write!(
+                        svg,
+                        "<circle cx=\"{x}\" cy=\"{y}\" r=\"2.5\" fill=\"{}\"/>",
+                        s.color
+                    );
+                }
             }
         }
         let ly = top + 4.0 + 14.0 * k as f64;
         let _ = write!(
             svg,
-            "<rect x=\"{lx}\" y=\"{ry}\" width=\"10\" height=\"3\" fill=\"{c}\"/><text x=\"{tx}\" y=\"{ly}\" font-size=\"11\">{n}</text>",
-            lx = w - right + 8.0,
+            "<line x1=\"{lx}\" y1=\"{ry}\" x2=\"{lx2}\" y2=\"{ry}\" stroke=\"{c}\" stroke-width=\"2\"{dash}/><text x=\"{tx}\" y=\"{ly}\" font-size=\"11\">{n}</text>",
+            lx = w - right + 4.0,
+            lx2 = w - right + 22.0,
             ry = ly - 4.0,
             c = s.color,
-            tx = w - right + 22.0,
+            tx = w - right + 26.0,
             n = escape(&s.name)
         );
     }
@@ -148,81 +165,36 @@ pub fn svg_plot(title: &str, x_label: &str, series: &[Series]) -> String {
     svg
 }
 
-fn mean_of(groom: &Groom, name: &str) -> Option<f64> {
-    match &groom.attribute(name)?.values {
-        AttributeValues::Float(v) if !v.is_empty() => {
-            Some(v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64)
-        }
-        _ => None,
-    }
-}
-
-/// The largest relative change of a segment's length from `reference`.
-fn largest_strain(reference: &Groom, groom: &Groom) -> f64 {
-    let mut largest = 0.0f64;
-    for (a, b) in reference.strands().zip(groom.strands()) {
-        for (sa, sb) in a.windows(2).zip(b.windows(2)) {
-            let length = |s: &[[f32; 3]]| {
-                let d: f64 = (0..3)
-                    .map(|k| (s[1][k] - s[0][k]) as f64)
-                    .map(|c| c * c)
-                    .sum();
-                d.sqrt()
-            };
-            let l0 = length(sa);
-            if l0 > 0.0 {
-                largest = largest.max((length(sb) / l0 - 1.0).abs());
-            }
-        }
-    }
-    largest
-}
-
 const BOND_COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
+/// Hydrogen solid, ionic dashed, disulfide dotted, peptide dash-dot.
+const BOND_DASHES: [&str; 4] = ["", "7 4", "2 3", "9 3 2 3"];
 
 /// The plots of a bake: mean bond rates per kind, mean wetness and the
-/// largest segment strain (against the groom before the bake), at the start
-/// and at the end of every stage.
-fn bake_plots(report: &BakeReport, snapshots: &[(String, Groom)]) -> String {
-    let mut times = vec![0.0];
-    for stage in &report.stages {
-        times.push(times.last().copied().unwrap_or(0.0) + stage.simulated_seconds);
-    }
-    let samples: Vec<(f64, &Groom)> = times
-        .iter()
-        .copied()
-        .zip(snapshots.iter().map(|s| &s.1))
-        .collect();
+/// largest edge strain (against the groom at the start), sampled every
+/// frame (1/24 s) and at the end of every stage ([`PlotSample`]).
+fn bake_plots(samples: &[PlotSample]) -> String {
     let bonds: Vec<Series> = BOND_RATES
         .iter()
-        .zip(BOND_COLORS)
-        .map(|(name, color)| Series {
+        .zip(BOND_COLORS.iter().zip(BOND_DASHES))
+        .enumerate()
+        .map(|(k, (name, (&color, dash)))| Series {
             name: name.trim_start_matches("bond_").to_string(),
             color,
-            points: samples
-                .iter()
-                .filter_map(|&(t, g)| Some((t, mean_of(g, name)?)))
-                .collect(),
+            dash,
+            points: samples.iter().map(|s| (s.time, s.bonds[k])).collect(),
         })
         .collect();
     let wetness = [Series {
         name: "wetness".into(),
         color: "#17becf",
-        points: samples
-            .iter()
-            .filter_map(|&(t, g)| Some((t, mean_of(g, WETNESS)?)))
-            .collect(),
+        dash: "",
+        points: samples.iter().map(|s| (s.time, s.wetness)).collect(),
     }];
     let strain = [Series {
         name: "largest strain".into(),
         color: "#ff7f0e",
-        points: match snapshots.first() {
-            Some((_, before)) => samples
-                .iter()
-                .map(|&(t, g)| (t, largest_strain(before, g)))
-                .collect(),
-            None => Vec::new(),
-        },
+        dash: "",
+        points: samples.iter().map(|s| (s.time, s.strain)).collect(),
     }];
     format!(
         "<div class=\"plots\">{}{}{}</div>\n",
@@ -243,12 +215,23 @@ fn warnings_html(warnings: &[String]) -> String {
     format!("<ul>{items}</ul>\n")
 }
 
+/// A path shown as a link relative to the page's folder `page_dir` (the
+/// text stays the path as the report has it).
+fn link(page_dir: &Path, target: &Path, text: &str) -> String {
+    match relative_href(page_dir, target) {
+        Some(href) => format!("<a href=\"{}\">{}</a>", escape(&href), escape(text)),
+        None => escape(text),
+    }
+}
+
 /// The HTML page of a bake: facts, contact sheet, stage timings, plots,
-/// contained strands, warnings, and the outputs with size and SHA-256.
+/// contained strands, warnings, and the outputs with size and SHA-256,
+/// linked relative to `page_dir`, the folder the page is written to.
 pub fn bake_page(
     report: &BakeReport,
-    snapshots: &[(String, Groom)],
+    samples: &[PlotSample],
     sheet_png: Option<&[u8]>,
+    page_dir: &Path,
 ) -> String {
     let mut body = String::new();
     let _ = write!(
@@ -278,7 +261,7 @@ pub fn bake_page(
     let held = report.stages.iter().any(|s| s.hold.is_some());
     let _ = writeln!(
         body,
-        "<h2>Stages</h2>\n<table><tr><th>#</th><th>name</th><th>kind</th><th>simulated (s)</th><th>steps</th><th>wall (s)</th><th>contained strands</th>{}</tr>",
+        "<h2>Stages</h2>\n<table><tr><th>#</th><th>name</th><th>kind</th><th>simulated (s)</th><th>steps</th><th>wall (s)</th><th>set kept</th><th>contained strands</th>{}</tr>",
         if held {
             "<th>hold (1/s<sup>2</sup>, root &rarr; tip)</th>"
         } else {
@@ -302,18 +285,20 @@ pub fn bake_page(
         };
         let _ = writeln!(
             body,
-            "<tr><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td>{}</td>{hold}</tr>",
+            "<tr><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{}</td><td class=\"num\">{:.3}</td><td class=\"num\">{}</td><td>{}</td>{hold}</tr>",
             s.index,
             escape(&s.name),
             escape(&s.kind),
             s.simulated_seconds,
             s.steps,
             s.wall_seconds,
+            s.set_kept
+                .map_or_else(|| "&ndash;".to_string(), |k| format!("{:.0} %", k * 100.0)),
             escape(&contained)
         );
     }
-    body.push_str("</table>\n<h2>Over time</h2>\n");
-    body.push_str(&bake_plots(report, snapshots));
+    body.push_str("</table>\n<p><small>Set kept: the share of the largest shape change so far (the pose pressed, wound or blown furthest from the groom at the start) that the rest shape keeps: 0 % the hair would spring back to its groomed shape if released after the stage, 100 % it keeps the whole change.</small></p>\n<h2>Over time</h2>\n");
+    body.push_str(&bake_plots(samples));
     body.push_str("<h2>Warnings</h2>\n");
     body.push_str(&warnings_html(&report.warnings));
     body.push_str("<h2>Outputs</h2>\n<table><tr><th>path</th><th>what</th><th>frames</th><th>bytes</th><th>SHA-256</th></tr>\n");
@@ -321,7 +306,7 @@ pub fn bake_page(
         let _ = writeln!(
             body,
             "<tr><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td><code>{}</code></td></tr>",
-            escape(&o.path),
+            link(page_dir, Path::new(&o.path), &o.path),
             escape(&o.what),
             o.frames.map(|f| f.to_string()).unwrap_or_default(),
             o.bytes,
@@ -333,18 +318,22 @@ pub fn bake_page(
 }
 
 /// The HTML page of a batch: a row per job with a thumbnail of its contact
-/// sheet (a `.png` output), its status, time and outputs.
-pub fn batch_page(report: &BatchReport) -> String {
+/// sheet (a `.png` output), its status, time, groom and outputs, linked
+/// relative to `page_dir`, the folder the page is written to.
+pub fn batch_page(report: &BatchReport, page_dir: &Path) -> String {
     let mut body = String::new();
+    // The jobs' own times: a merge of a farm's reports runs long after them.
+    let job_seconds: f64 = report.jobs.iter().map(|j| j.wall_seconds).sum();
     let _ = write!(
         body,
-        "<h1>groombake batch: {}</h1>\n<p>groombake {} &middot; {} jobs: {} succeeded, {} failed, {} missing &middot; {:.1} s</p>\n",
+        "<h1>groombake batch: {}</h1>\n<p>groombake {} &middot; {} jobs: {} succeeded, {} failed, {} missing &middot; jobs took {:.1} s in all &middot; this run {:.1} s</p>\n",
         escape(&report.manifest),
         escape(&report.groombake_version),
         report.jobs.len(),
         report.succeeded,
         report.failed,
         report.missing,
+        job_seconds,
         report.wall_seconds
     );
     body.push_str("<table><tr><th>sheet</th><th>job</th><th>status</th><th>wall (s)</th><th>outputs (bytes, SHA-256)</th></tr>\n");
@@ -363,11 +352,17 @@ pub fn batch_page(report: &BatchReport) -> String {
                 )
             })
             .unwrap_or_else(|| "&ndash;".into());
+        let groom = job
+            .groom
+            .as_deref()
+            .map(|g| format!("<br>groom {}", escape(g)))
+            .unwrap_or_default();
         let status = match job.status {
             JobStatus::Ok => "ok",
             JobStatus::Skipped => "skipped",
             JobStatus::Failed => "failed",
             JobStatus::Missing => "missing",
+            JobStatus::Interrupted => "interrupted",
         };
         let error = job
             .error
@@ -380,7 +375,7 @@ pub fn batch_page(report: &BatchReport) -> String {
             .map(|o| {
                 format!(
                     "{} ({} bytes, <code>{}</code>)<br>",
-                    escape(&o.path),
+                    link(page_dir, &folder.join(&o.path), &o.path),
                     o.bytes,
                     escape(&o.sha256[..o.sha256.len().min(16)])
                 )
@@ -388,7 +383,7 @@ pub fn batch_page(report: &BatchReport) -> String {
             .collect();
         let _ = writeln!(
             body,
-            "<tr><td>{thumbnail}</td><td>{}<br><small>{}</small></td><td class=\"{status}\">{status}{error}</td><td class=\"num\">{:.2}</td><td>{outputs}</td></tr>",
+            "<tr><td>{thumbnail}</td><td>{}<br><small>{}{groom}</small></td><td class=\"{status}\">{status}{error}</td><td class=\"num\">{:.2}</td><td>{outputs}</td></tr>",
             escape(&job.name),
             escape(&job.timeline),
             job.wall_seconds
@@ -411,23 +406,18 @@ mod tests {
     }
 
     #[test]
-    fn strain_of_a_stretched_segment() {
-        let a = Groom::from_strands([vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]]);
-        let b = Groom::from_strands([vec![[0.0, 0.0, 0.0], [0.0, 1.25, 0.0]]]);
-        assert!((largest_strain(&a, &b) - 0.25).abs() < 1e-6);
-    }
-
-    #[test]
     fn plot_has_one_polyline_per_series() {
         let series = [
             Series {
                 name: "a".into(),
                 color: "#000",
+                dash: "",
                 points: vec![(0.0, 1.0), (1.0, 2.0)],
             },
             Series {
                 name: "b".into(),
                 color: "#f00",
+                dash: "2 3",
                 points: vec![(0.0, 0.5)],
             },
         ];

@@ -33,6 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut frame = Frame {
         time: 0.0,
         points: groom.points.clone(),
+        attributes: Vec::new(),
     };
     for k in 0..frames {
         frame.time = k as f64 / 24.0;

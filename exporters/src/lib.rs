@@ -11,9 +11,12 @@ pub mod data;
 pub mod gltf;
 pub mod hair;
 pub mod obj;
+pub mod target;
 pub mod usd;
 
-use groom::{AttributeValues, Frame, Groom, Scope, Units};
+pub use target::{destination, written_in, AttributeSet, Destination, Target};
+
+use groom::{AttributeValues, Frame, Groom, Scope, Units, UpAxis};
 use std::path::{Path, PathBuf};
 
 /// Why a file could not be written.
@@ -76,43 +79,24 @@ fn check_exportable(path: &Path, groom: &Groom) -> Result<(), ExportError> {
             message: problem.to_string(),
         });
     }
-    let scale = format_scale(path, groom);
-    check_scaled(path, &groom.points, scale, None)?;
+    check_finite(path, &groom.points, None)?;
     for (index, frame) in groom.frames.iter().enumerate() {
-        check_scaled(path, &frame.points, scale, Some(index))?;
+        check_finite(path, &frame.points, Some(index))?;
     }
     Ok(())
 }
 
-/// The scale a format applies to the groom's coordinates by itself, after
-/// the caller's unit conversion: Alembic is written in centimetres.
-fn format_scale(path: &Path, groom: &Groom) -> f64 {
-    match extension_of(path).as_str() {
-        "abc" => groom.units.meters_per_unit / groom::Units::CENTIMETERS.meters_per_unit,
-        _ => 1.0,
-    }
-}
-
-/// Refuses points that are not finite as the file will store them (f32
-/// after `scale`): 1.7e38 m is finite, in centimetres it is infinite.
-fn check_scaled(
-    path: &Path,
-    points: &[[f32; 3]],
-    scale: f64,
-    frame: Option<usize>,
-) -> Result<(), ExportError> {
-    let stored = |c: f32| (f64::from(c) * scale) as f32;
-    let Some(index) = points
-        .iter()
-        .position(|p| !p.iter().all(|&c| stored(c).is_finite()))
-    else {
+/// Refuses points that are not finite (every writer stores the groom's
+/// numbers as they are, in the units the caller converted it to).
+fn check_finite(path: &Path, points: &[[f32; 3]], frame: Option<usize>) -> Result<(), ExportError> {
+    let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) else {
         return Ok(());
     };
     let frame = frame.map_or(String::new(), |f| format!("frame {f}, "));
     Err(ExportError::Invalid {
         file: path.to_path_buf(),
         message: format!(
-            "{frame}vertex {index} {:?} is not finite in the file's units (x{scale})",
+            "{frame}vertex {index} {:?} is not finite in the file's units",
             points[index]
         ),
     })
@@ -121,7 +105,6 @@ fn check_scaled(
 /// A frame writer that refuses frames with values the file cannot hold.
 struct CheckedFrames {
     path: PathBuf,
-    scale: f64,
     frames: usize,
     inner: Box<dyn FrameWriter>,
 }
@@ -134,7 +117,7 @@ impl FrameWriter for CheckedFrames {
                 message: format!("frame {}: time is not finite", self.frames),
             });
         }
-        check_scaled(&self.path, &frame.points, self.scale, Some(self.frames))?;
+        check_finite(&self.path, &frame.points, Some(self.frames))?;
         self.frames += 1;
         self.inner.write_frame(frame)
     }
@@ -148,15 +131,32 @@ impl FrameWriter for CheckedFrames {
 /// written animated where the format can hold animation; the static formats
 /// (`.hair`, `.data`, `.obj`) write its points.
 pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
+    write_as(path, groom, AttributeSet::default())
+}
+
+/// [`write`] with the attribute names of a destination ([`Target`]).
+pub fn write_as(path: &Path, groom: &Groom, attributes: AttributeSet) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
-    match extension_of(path).as_str() {
+    let extension = extension_of(path);
+    // `.hair` and `.data` record no axis and their readers take Y up:
+    // a groom of another axis is turned to Y up as it is written.
+    let y_up;
+    let groom = if matches!(extension.as_str(), "hair" | "data") && groom.up_axis != UpAxis::Y {
+        let mut turned = groom.clone();
+        turned.convert_to(groom.units, UpAxis::Y);
+        y_up = turned;
+        &y_up
+    } else {
+        groom
+    };
+    match extension.as_str() {
         "hair" => hair::write(path, groom),
         "data" => data::write(path, groom),
         "obj" => obj::write(path, groom),
         "gltf" | "glb" => gltf::write(path, groom),
         "usda" => usd::write(path, groom, usd::Encoding::Text),
         "usdc" | "usd" => usd::write(path, groom, usd::Encoding::Crate),
-        "abc" => abc::write(path, groom),
+        "abc" => abc::write(path, groom, attributes),
         _ => Err(ExportError::UnknownFormat {
             file: path.to_path_buf(),
         }),
@@ -192,6 +192,16 @@ pub fn animated(
     groom: &Groom,
     options: AnimationOptions,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
+    animated_as(path, groom, options, AttributeSet::default())
+}
+
+/// [`animated`] with the attribute names of a destination ([`Target`]).
+pub fn animated_as(
+    path: &Path,
+    groom: &Groom,
+    options: AnimationOptions,
+    attributes: AttributeSet,
+) -> Result<Box<dyn FrameWriter>, ExportError> {
     check_exportable(path, groom)?;
     // glTF keeps frame times in seconds; USD writes time codes and Alembic
     // its time sampling at `options.fps`.
@@ -199,7 +209,7 @@ pub fn animated(
         "usda" => usd::animated(path, groom, options, usd::Encoding::Text),
         "usdc" | "usd" => usd::animated(path, groom, options, usd::Encoding::Crate),
         "gltf" | "glb" => gltf::animated(path, groom),
-        "abc" => abc::animated(path, groom, options),
+        "abc" => abc::animated(path, groom, options, attributes),
         "hair" | "data" | "obj" => Err(ExportError::Unsupported {
             file: path.to_path_buf(),
             message: "this format holds no animation; write one frame with convert --frame".into(),
@@ -210,7 +220,6 @@ pub fn animated(
     }?;
     Ok(Box::new(CheckedFrames {
         path: path.to_path_buf(),
-        scale: format_scale(path, groom),
         frames: 0,
         inner,
     }))
@@ -218,11 +227,13 @@ pub fn animated(
 
 /// The units a file at `path` is written in when the user names none (the
 /// units rule in [`groom::Units`]' module): glTF in metres (its
-/// specification), USD in the groom's own units (it records them), and
-/// `.abc`, `.hair`, `.data`, `.obj` in the centimetres their readers assume.
+/// specification), USD in the groom's own units (it records them), `.abc`
+/// and `.obj` in metres (what Blender and Houdini read them as; Unreal and
+/// Maya take `target = "unreal"`/`"maya"`, centimetres), and `.hair` and
+/// `.data` in the centimetres their readers assume.
 pub fn default_units(path: &Path, groom_units: Units) -> Units {
     match extension_of(path).as_str() {
-        "gltf" | "glb" => Units::METERS,
+        "gltf" | "glb" | "abc" | "obj" => Units::METERS,
         "usda" | "usdc" | "usd" => groom_units,
         _ => Units::CENTIMETERS,
     }
@@ -257,6 +268,25 @@ pub fn units_warning(path: &Path, units: Units) -> Option<String> {
     }
 }
 
+/// A warning for attributes that change over an animation (`names`, as
+/// [`Frame::attributes`] carries them) written to a format that cannot
+/// animate them: glTF animates positions only (morph targets hold
+/// positions, normals and tangents), so its frames hold the first frame's
+/// values. `None` for USD and Alembic, which sample them per frame.
+pub fn frame_attributes_warning<S: AsRef<str>>(path: &Path, names: &[S]) -> Option<String> {
+    let gltf = matches!(extension_of(path).as_str(), "gltf" | "glb");
+    if !gltf || names.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = names.iter().map(AsRef::as_ref).collect();
+    Some(format!(
+        "{}: glTF cannot animate vertex attributes: {} hold their first frame's values in every \
+         frame (write .usdc or .abc for them per frame, or convert one frame of those with --frame)",
+        path.display(),
+        names.join(", ")
+    ))
+}
+
 /// One line per kind of change writing `groom` (in `units`) to `path` must
 /// make to the data: units the file cannot keep, attributes the format
 /// cannot hold, curve types or a wrap it cannot write. Empty when the file
@@ -266,6 +296,16 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
     let extension = extension_of(path);
     let file = path.display();
     let mut warnings: Vec<String> = units_warning(path, units).into_iter().collect();
+    if groom.up_axis != UpAxis::Y && matches!(extension.as_str(), "abc" | "hair" | "data") {
+        warnings.push(format!(
+            "{file}: .{extension} is read Y up by every reader and records no axis: written Y up, not {} up",
+            groom.up_axis
+        ));
+    }
+    if let Some(frame) = groom.frames.first() {
+        let names: Vec<&str> = frame.attributes.iter().map(|a| a.name.as_str()).collect();
+        warnings.extend(frame_attributes_warning(path, &names));
+    }
     let dropped: Vec<&str> = groom
         .attributes
         .iter()
@@ -313,6 +353,41 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
             "{file}: wrap {wrap}: .{extension} writes nonperiodic curves"
         )),
         _ => {}
+    }
+    warnings
+}
+
+/// What a format changes about strand order or the base pose of a groom
+/// read from a file (`convert`), said rather than done silently: USD and
+/// glTF write guides before render strands (one prim or primitive each),
+/// and Alembic stores the frames only, so a base pose that is not frame 0
+/// (an animated USD's default `points`) is lost.
+pub fn order_and_pose_warnings(path: &Path, groom: &Groom) -> Vec<String> {
+    let extension = extension_of(path);
+    let file = path.display();
+    let mut warnings = Vec::new();
+    let splits_guides = matches!(extension.as_str(), "usda" | "usdc" | "usd" | "gltf" | "glb");
+    if let (true, Some(guide)) = (splits_guides, groom.attribute(groom::guides::GROOM_GUIDE)) {
+        if let (Scope::Strand, AttributeValues::Int(flags)) = (guide.scope, &guide.values) {
+            let guide_after_render = flags.iter().skip_while(|&&f| f != 0).any(|&f| f != 0);
+            if guide_after_render {
+                warnings.push(format!(
+                    "{file}: guides and render strands (groom_guide) are interleaved: \
+                     .{extension} writes the guides first, so the strands are reordered"
+                ));
+            }
+        }
+    }
+    if extension == "abc" {
+        if let Some(first) = groom.frames.first() {
+            if first.points != groom.points {
+                warnings.push(format!(
+                    "{file}: the base pose differs from frame 0 (at {} s): .abc stores the \
+                     frames only, so the base pose is dropped",
+                    first.time
+                ));
+            }
+        }
     }
     warnings
 }

@@ -220,6 +220,7 @@ fn animation_frames(groom: &Groom, count: usize) -> Vec<Frame> {
                 .enumerate()
                 .map(|(i, p)| [p[0] + k as f32 * 0.5, p[1] - (k * i) as f32 * 0.01, p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect()
 }
@@ -287,6 +288,7 @@ fn bad_frames_are_refused_and_leave_no_file() {
     let short = Frame {
         time: 0.0,
         points: vec![[0.0; 3]; 2],
+        attributes: Vec::new(),
     };
     assert!(matches!(
         writer.write_frame(&short),
@@ -298,6 +300,7 @@ fn bad_frames_are_refused_and_leave_no_file() {
         .write_frame(&Frame {
             time: 0.0,
             points: nan,
+            attributes: Vec::new(),
         })
         .unwrap_err()
         .to_string();
@@ -306,12 +309,14 @@ fn bad_frames_are_refused_and_leave_no_file() {
         .write_frame(&Frame {
             time: 1.0,
             points: groom.points.clone(),
+            attributes: Vec::new(),
         })
         .unwrap();
     let error = writer
         .write_frame(&Frame {
             time: 0.5,
             points: groom.points.clone(),
+            attributes: Vec::new(),
         })
         .unwrap_err()
         .to_string();

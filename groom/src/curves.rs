@@ -255,24 +255,27 @@ impl CurveMap {
     pub fn apply(&self, groom: &Groom) -> Groom {
         let mut out = groom.clone();
         out.points = self.points(&groom.points);
+        let blend = self.vertex_blend();
+        let reshape = |attributes: &[Attribute]| -> Vec<Attribute> {
+            attributes
+                .iter()
+                .map(|a| match a.scope {
+                    Scope::Strand => a.clone(),
+                    Scope::Vertex => Attribute {
+                        name: a.name.clone(),
+                        scope: Scope::Vertex,
+                        values: blend_values(&a.values, &blend),
+                    },
+                })
+                .collect()
+        };
         for frame in &mut out.frames {
             frame.points = self.points(&frame.points);
+            frame.attributes = reshape(&frame.attributes);
         }
         out.strand_vertex_counts = self.counts.clone();
         out.basis = self.basis();
-        let blend = self.vertex_blend();
-        out.attributes = groom
-            .attributes
-            .iter()
-            .map(|a| match a.scope {
-                Scope::Strand => a.clone(),
-                Scope::Vertex => Attribute {
-                    name: a.name.clone(),
-                    scope: Scope::Vertex,
-                    values: blend_values(&a.values, &blend),
-                },
-            })
-            .collect();
+        out.attributes = reshape(&groom.attributes);
         out
     }
 }
@@ -429,15 +432,16 @@ pub fn tessellate(groom: &Groom, per_span: usize) -> std::borrow::Cow<'_, Groom>
     let mut out = groom.clone();
     out.basis = CurveBasis::Linear;
     out.points = evaluate(&groom.points);
-    for frame in &mut out.frames {
-        frame.points = evaluate(&frame.points);
-    }
     out.strand_vertex_counts = counts;
     let blend: Vec<(usize, usize, f32)> = nearest.iter().map(|&i| (i, i, 0.0)).collect();
-    for a in &mut out.attributes {
+    let frame_attributes = out.frames.iter_mut().flat_map(|f| &mut f.attributes);
+    for a in out.attributes.iter_mut().chain(frame_attributes) {
         if a.scope == Scope::Vertex {
             a.values = blend_values(&a.values, &blend);
         }
+    }
+    for frame in &mut out.frames {
+        frame.points = evaluate(&frame.points);
     }
     std::borrow::Cow::Owned(out)
 }

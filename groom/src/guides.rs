@@ -191,6 +191,7 @@ pub fn join(guides: &Groom, render: &Groom, closest: &[[u32; 3]], weights: &[[f3
             .map(|(a, b)| Frame {
                 time: a.time,
                 points: a.points.iter().chain(&b.points).copied().collect(),
+                attributes: Vec::new(),
             })
             .collect();
     }

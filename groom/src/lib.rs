@@ -73,6 +73,11 @@ pub struct Provenance {
     /// for), keyed `<format>.<field>`. A writer honours them only while the
     /// groom still matches what they describe.
     pub metadata: std::collections::BTreeMap<String, String>,
+    /// What the reader could not keep of the file (a prim it skipped, a
+    /// primvar it dropped), one line each naming it (not the file, which
+    /// the caller names): `convert`, `inspect` and the bake print them as
+    /// warnings, and `--strict` refuses them.
+    pub losses: Vec<String>,
 }
 
 /// One time sample of every point of the groom (same topology as the groom).
@@ -81,6 +86,18 @@ pub struct Frame {
     /// Seconds.
     pub time: f64,
     pub points: Vec<[f32; 3]>,
+    /// The attributes that change over time (a bake's bond rates and
+    /// wetness), with their values at this frame, each as the groom's
+    /// attribute of the same name would be (scope and size). Empty for
+    /// attributes that hold still: those are the groom's, written once.
+    pub attributes: Vec<Attribute>,
+}
+
+impl Frame {
+    /// The frame's value of a time-varying attribute.
+    pub fn attribute(&self, name: &str) -> Option<&Attribute> {
+        self.attributes.iter().find(|a| a.name == name)
+    }
 }
 
 /// A set of strands with their attributes and optional animation.
@@ -201,20 +218,21 @@ impl Groom {
                 .flat_map(|r| points.get(r.clone()).unwrap_or(&[]).iter().copied())
                 .collect()
         };
-        let attributes = self
-            .attributes
-            .iter()
-            .map(|a| Attribute {
-                name: a.name.clone(),
-                scope: a.scope,
-                values: match a.scope {
-                    Scope::Vertex => a.values.select(&ranges),
-                    Scope::Strand => a
-                        .values
-                        .select(&kept.iter().map(|&s| s..s + 1).collect::<Vec<_>>()),
-                },
-            })
-            .collect();
+        let strand_ranges: Vec<std::ops::Range<usize>> = kept.iter().map(|&s| s..s + 1).collect();
+        let select = |attributes: &[Attribute]| -> Vec<Attribute> {
+            attributes
+                .iter()
+                .map(|a| Attribute {
+                    name: a.name.clone(),
+                    scope: a.scope,
+                    values: match a.scope {
+                        Scope::Vertex => a.values.select(&ranges),
+                        Scope::Strand => a.values.select(&strand_ranges),
+                    },
+                })
+                .collect()
+        };
+        let attributes = select(&self.attributes);
         Groom {
             strand_vertex_counts: kept.iter().map(|&s| self.strand_vertex_counts[s]).collect(),
             points: pick(&self.points),
@@ -225,6 +243,7 @@ impl Groom {
                 .map(|f| Frame {
                     time: f.time,
                     points: pick(&f.points),
+                    attributes: select(&f.attributes),
                 })
                 .collect(),
             units: self.units,
@@ -239,6 +258,9 @@ impl Groom {
         let frame = self.frames.get(index)?;
         let mut groom = self.clone();
         groom.points = frame.points.clone();
+        for attribute in &frame.attributes {
+            groom.set_attribute(attribute.clone());
+        }
         groom.frames.clear();
         Some(groom)
     }
@@ -324,6 +346,7 @@ mod tests {
         groom.frames.push(Frame {
             time: 0.0,
             points: moved,
+            attributes: Vec::new(),
         });
         assert_eq!(groom.bounds(), Some(([-5.0, 0.0, 0.0], [1.0, 2.0, 0.0])));
     }

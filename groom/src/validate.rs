@@ -249,6 +249,7 @@ mod tests {
         groom.frames.push(Frame {
             time: 0.0,
             points: vec![[0.0; 3]; 2],
+            attributes: Vec::new(),
         });
         let problems = groom.validate();
         let text: Vec<String> = problems.iter().map(|p| p.to_string()).collect();
@@ -283,6 +284,7 @@ mod tests {
                 points[5][1] = f32::NAN;
                 points
             },
+            attributes: Vec::new(),
         });
         let text: Vec<String> = groom.validate().iter().map(|p| p.to_string()).collect();
         assert_eq!(

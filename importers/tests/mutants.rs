@@ -139,6 +139,7 @@ fn sample_groom(frames: bool) -> Groom {
                     .iter()
                     .map(|p| [p[0] + 0.1 * k as f32, p[1], p[2]])
                     .collect(),
+                attributes: Vec::new(),
             })
             .collect();
     }

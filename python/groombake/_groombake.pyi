@@ -76,6 +76,11 @@ class Timeline:
 class Report:
     """What a bake did: timeline, seed, threads, strands, vertices, stages, outputs, warnings..."""
 
+    status: str
+    started: str
+    finished: str
+    timeline: str
+    sources: List[Dict[str, Any]]
     stages: List[Dict[str, Any]]
     outputs: List[Dict[str, Any]]
     warnings: List[str]
@@ -87,6 +92,6 @@ def bake(
     out: Optional[_Path] = None,
     threads: Optional[int] = None,
     seed: Optional[int] = None,
-    progress: Optional[Callable[[float], Any]] = None,
+    progress: Optional[Union[Callable[[float, str], Any], Callable[[float], Any]]] = None,
 ) -> Report:
     """Runs a timeline and writes its exports; the GIL is released while it runs."""

@@ -6,10 +6,45 @@
 //! Hand-written rather than a TOML serializer because the line-to-key map
 //! is the point: top-level tables become `[name]` / `[[name]]` headers and
 //! every leaf one `dotted.key = value` line beneath them.
+//!
+//! Nesting is bounded ([`MAX_DEPTH`]) and a list or dict that contains
+//! itself is refused: either would otherwise recurse until the
+//! interpreter's stack overflows.
 
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+/// Lists and dicts nested deeper than this are refused (a timeline nests
+/// four: `stage[0].motion.keys[1]`; the TOML parser stops at 80).
+pub const MAX_DEPTH: usize = 64;
+
+/// The containers from the top of the dict down to the value being
+/// written: their depth, and their identities to find a cycle.
+#[derive(Default)]
+struct Ancestors(Vec<usize>);
+
+impl Ancestors {
+    /// Enters `value` (a list, tuple or dict) at `path`, or refuses it.
+    fn enter(&mut self, value: &Bound<'_, PyAny>, path: &str) -> PyResult<()> {
+        let id = value.as_ptr() as usize;
+        if self.0.contains(&id) {
+            return Err(bad(path, "the value contains itself (a cycle)"));
+        }
+        if self.0.len() >= MAX_DEPTH {
+            return Err(bad(
+                path,
+                &format!("lists and dicts nested more than {MAX_DEPTH} deep"),
+            ));
+        }
+        self.0.push(id);
+        Ok(())
+    }
+
+    fn leave(&mut self) {
+        self.0.pop();
+    }
+}
 
 pub struct Document {
     pub text: String,
@@ -74,7 +109,7 @@ fn join(path: &str, name: &str) -> String {
 }
 
 /// A value written inline (on one line).
-fn inline(value: &Bound<'_, PyAny>, path: &str) -> PyResult<String> {
+fn inline(value: &Bound<'_, PyAny>, path: &str, up: &mut Ancestors) -> PyResult<String> {
     if value.is_none() {
         return Err(bad(path, "None is not a value (leave the key out)"));
     }
@@ -91,6 +126,19 @@ fn inline(value: &Bound<'_, PyAny>, path: &str) -> PyResult<String> {
             .extract()
             .map_err(|_| bad(path, "integer out of range"))?;
         return Ok(i.to_string());
+    }
+    // numpy scalars and arrays: through their Python form (an array has
+    // `__float__` too, which fails for more than one element).
+    if !value.is_instance_of::<PyFloat>()
+        && !value.is_instance_of::<PyString>()
+        && items(value).is_none()
+        && !is_table(value)
+        && value.hasattr("tolist")?
+    {
+        up.enter(value, path)?;
+        let result = inline(&value.call_method0("tolist")?, path, up);
+        up.leave();
+        return result;
     }
     if value.is_instance_of::<PyFloat>()
         || value.hasattr("__float__")?
@@ -118,23 +166,23 @@ fn inline(value: &Bound<'_, PyAny>, path: &str) -> PyResult<String> {
         return Ok(quoted(&s.to_cow()?));
     }
     if let Some(list) = items(value) {
+        up.enter(value, path)?;
         let parts = list
             .iter()
             .enumerate()
-            .map(|(i, v)| inline(v, &format!("{path}[{i}]")))
+            .map(|(i, v)| inline(v, &format!("{path}[{i}]"), up))
             .collect::<PyResult<Vec<_>>>()?;
+        up.leave();
         return Ok(format!("[{}]", parts.join(", ")));
     }
     if let Ok(dict) = value.cast::<PyDict>() {
+        up.enter(value, path)?;
         let parts = dict_entries(dict, path)?
             .iter()
-            .map(|(k, v)| Ok(format!("{} = {}", key(k), inline(v, &join(path, k))?)))
+            .map(|(k, v)| Ok(format!("{} = {}", key(k), inline(v, &join(path, k), up)?)))
             .collect::<PyResult<Vec<_>>>()?;
+        up.leave();
         return Ok(format!("{{ {} }}", parts.join(", ")));
-    }
-    // numpy scalars and arrays: through their Python form.
-    if value.hasattr("tolist")? {
-        return inline(&value.call_method0("tolist")?, path);
     }
     Err(bad(
         path,
@@ -155,7 +203,14 @@ impl Document {
     }
 
     /// The leaves of a table as `dotted.key = value` lines.
-    fn leaves(&mut self, dict: &Bound<'_, PyDict>, prefix: &str, path: &str) -> PyResult<()> {
+    fn leaves(
+        &mut self,
+        dict: &Bound<'_, PyDict>,
+        prefix: &str,
+        path: &str,
+        up: &mut Ancestors,
+    ) -> PyResult<()> {
+        up.enter(dict.as_any(), path)?;
         for (k, v) in dict_entries(dict, path)? {
             let key_path = join(path, &k);
             let dotted = if prefix.is_empty() {
@@ -164,13 +219,14 @@ impl Document {
                 format!("{prefix}.{}", key(&k))
             };
             match v.cast::<PyDict>() {
-                Ok(sub) if !sub.is_empty() => self.leaves(sub, &dotted, &key_path)?,
+                Ok(sub) if !sub.is_empty() => self.leaves(sub, &dotted, &key_path, up)?,
                 _ => {
-                    let value = inline(&v, &key_path)?;
+                    let value = inline(&v, &key_path, up)?;
                     self.line(format!("{dotted} = {value}"), key_path);
                 }
             }
         }
+        up.leave();
         Ok(())
     }
 
@@ -185,27 +241,31 @@ impl Document {
             "# a timeline from a Python dict".into(),
             "(top level)".into(),
         );
+        let mut up = Ancestors::default();
+        up.enter(dict.as_any(), "(top level)")?;
         let entries = dict_entries(dict, "")?;
         // Plain values first: TOML puts them before any table header.
         for (k, v) in &entries {
             if !is_table(v) && table_list(v).is_none() {
-                let value = inline(v, k)?;
+                let value = inline(v, k, &mut up)?;
                 document.line(format!("{} = {value}", key(k)), k.clone());
             }
         }
         for (k, v) in &entries {
             if let Ok(table) = v.cast::<PyDict>() {
                 document.line(format!("[{}]", key(k)), k.clone());
-                document.leaves(table, "", k)?;
+                document.leaves(table, "", k, &mut up)?;
             } else if let Some(list) = table_list(v) {
+                up.enter(v, k)?;
                 for (i, item) in list.iter().enumerate() {
                     let path = format!("{k}[{i}]");
                     document.line(format!("[[{}]]", key(k)), path.clone());
                     let table = item
                         .cast::<PyDict>()
                         .map_err(|_| PyException::new_err("not a dict"))?;
-                    document.leaves(table, "", &path)?;
+                    document.leaves(table, "", &path, &mut up)?;
                 }
+                up.leave();
             }
         }
         Ok(document)

@@ -128,12 +128,21 @@ fn attribute_values(value: &Bound<'_, PyAny>, name: &str) -> PyResult<AttributeV
     let ndim: usize = array.getattr("ndim")?.extract()?;
     let what = format!("attribute {name}");
     match (kind.as_str(), ndim) {
-        ("i" | "u" | "b", 1) => {
-            let ints = as_array(&array, "int32")?;
+        ("i" | "b", 1) => {
+            // Through int64 and a checked narrowing: numpy's own cast to
+            // int32 wraps (2**40 would become 0).
+            let ints = as_array(&array, "int64")?;
             let ints = ints
-                .cast::<PyArray1<i32>>()
+                .cast::<PyArray1<i64>>()
                 .map_err(|e| bad_input(format!("{what}: {e}")))?;
-            Ok(AttributeValues::Int(ints.to_vec()?))
+            Ok(AttributeValues::Int(int32_values(ints.to_vec()?, &what)?))
+        }
+        ("u", 1) => {
+            let ints = as_array(&array, "uint64")?;
+            let ints = ints
+                .cast::<PyArray1<u64>>()
+                .map_err(|e| bad_input(format!("{what}: {e}")))?;
+            Ok(AttributeValues::Int(int32_values(ints.to_vec()?, &what)?))
         }
         (_, 1) => {
             let floats = as_array(&array, "float32")?;
@@ -155,6 +164,68 @@ fn attribute_values(value: &Bound<'_, PyAny>, name: &str) -> PyResult<AttributeV
         _ => Err(bad_input(format!(
             "{what}: expected a 1- or 2-dimensional array"
         ))),
+    }
+}
+
+/// Integer attribute values as the groom stores them (int32), refusing
+/// one out of range instead of wrapping it.
+fn int32_values<T>(values: Vec<T>, what: &str) -> PyResult<Vec<i32>>
+where
+    T: Copy + std::fmt::Display,
+    i32: TryFrom<T>,
+{
+    values
+        .into_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            i32::try_from(v).map_err(|_| {
+                bad_input(format!(
+                    "{what}[{i}]: {v} is outside the int32 range of integer attributes \
+                     ({} to {})",
+                    i32::MIN,
+                    i32::MAX
+                ))
+            })
+        })
+        .collect()
+}
+
+/// Refuses frame times an export would refuse: not finite, negative, or
+/// not increasing by at least [`groombake::budget::MIN_DT`] (closer times
+/// share one USD time code or one f32 glTF key).
+fn check_times(times: &[f64]) -> PyResult<()> {
+    for (k, &time) in times.iter().enumerate() {
+        if !(time.is_finite() && time >= 0.0) {
+            return Err(bad_input(format!(
+                "times[{k}]: {time} is not a non-negative number of seconds"
+            )));
+        }
+        if k > 0 {
+            let last = times[k - 1];
+            if !(time - last >= groombake::budget::MIN_DT && (time as f32) > (last as f32)) {
+                return Err(bad_input(format!(
+                    "times[{k}]: {time} s does not follow {last} s by at least {} s",
+                    groombake::budget::MIN_DT
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses points no format can store: finite as f32 in centimetres (the
+/// largest scale a writer applies, Alembic's).
+fn check_storable(points: &[[f32; 3]], meters_per_unit: f64, what: &str) -> PyResult<()> {
+    let scale = meters_per_unit / groom::Units::CENTIMETERS.meters_per_unit;
+    match points.iter().position(|p| {
+        !p.iter()
+            .all(|&c| ((f64::from(c) * scale) as f32).is_finite())
+    }) {
+        Some(i) => Err(bad_input(format!(
+            "{what}[{i}]: {:?} is not finite in centimetres, as Alembic stores it",
+            points[i]
+        ))),
+        None => Ok(()),
     }
 }
 
@@ -300,6 +371,10 @@ impl PyGroom {
         groom.units = parse_units(Some(units))?.unwrap_or_default();
         groom.up_axis = parse_up(Some(up))?.unwrap_or_default();
         groom.provenance.format = "python".into();
+        if let Some(times) = &times {
+            check_times(times)?;
+        }
+        check_storable(&groom.points, groom.units.meters_per_unit, "points")?;
         if let Some(frames) = frames {
             let frames = as_array(frames, "float32")?;
             let shape: Vec<usize> = frames.getattr("shape")?.extract()?;
@@ -316,9 +391,13 @@ impl PyGroom {
                     })?,
                     None => k as f64 / 24.0,
                 };
+                let what = format!("frames[{k}]");
+                let points = float_rows::<3>(&frames.get_item(k)?, &what)?;
+                check_storable(&points, groom.units.meters_per_unit, &what)?;
                 groom.frames.push(Frame {
                     time,
-                    points: float_rows::<3>(&frames.get_item(k)?, &format!("frames[{k}]"))?,
+                    points,
+                    attributes: Vec::new(),
                 });
             }
         }
@@ -525,8 +604,9 @@ fn to_python<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<
 }
 
 /// What a bake did (the content of `groombake bake --report`): its keys
-/// are attributes (`report.stages`, `report.outputs`, `report.warnings`,
-/// ...); `to_dict()` gives all of it.
+/// are attributes (`report.status`, `report.finished`, `report.stages`,
+/// `report.outputs`, `report.warnings`, ...), listed by `dir()`;
+/// `to_dict()` gives all of it.
 #[pyclass(name = "Report", module = "groombake")]
 pub struct PyReport {
     data: Py<PyDict>,
@@ -539,6 +619,20 @@ impl PyReport {
             .bind(py)
             .get_item(name)?
             .ok_or_else(|| pyo3::exceptions::PyAttributeError::new_err(name.to_string()))
+    }
+
+    /// The report's keys beside the class's attributes, so that `dir()`
+    /// and completion in an interactive shell show them.
+    fn __dir__(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
+        let py = slf.py();
+        let object = py.import("builtins")?.getattr("object")?;
+        let mut names: Vec<String> = object.call_method1("__dir__", (slf,))?.extract()?;
+        for key in slf.borrow().data.bind(py).keys() {
+            names.push(key.extract()?);
+        }
+        names.sort();
+        names.dedup();
+        Ok(names)
     }
 
     /// The whole report as a dict.
@@ -576,25 +670,42 @@ impl PyReport {
 /// threads: worker threads (default: one per core); outputs are
 /// byte-identical for any count. seed: overrides the timeline's seed.
 /// progress: called with the fraction done (0.0 to 1.0, never
-/// decreasing), about 20 times a second and at the end.
+/// decreasing) and the name of the stage running (`progress(fraction,
+/// stage)`; a callable of one argument gets the fraction only), about 20
+/// times a second, when a stage starts and at the end.
 ///
 /// The GIL is released while baking: other Python threads run. Ctrl-C
 /// (KeyboardInterrupt) stops the bake after its current step and leaves
-/// no half-written file. Returns a Report; raises BadInput for bad input
-/// and BakeError for a failure during the bake.
+/// no half-written file. Returns a finished Report (`status` "ok",
+/// `finished`, `outputs`, `sources`, as `groombake bake --report` writes
+/// it); raises BadInput for bad input and BakeError for a failure during
+/// the bake.
 #[pyfunction]
 #[pyo3(signature = (timeline, out=None, threads=None, seed=None, progress=None))]
 fn bake(
     py: Python<'_>,
     timeline: &Bound<'_, PyAny>,
     out: Option<PathBuf>,
-    threads: Option<usize>,
+    threads: Option<Bound<'_, PyAny>>,
     seed: Option<u64>,
     progress: Option<Bound<'_, PyAny>>,
 ) -> PyResult<PyReport> {
-    if threads == Some(0) {
-        return Err(bad_input("threads must be at least 1"));
-    }
+    // The CLI's cap: a million threads would run for minutes.
+    let threads = threads
+        .map(|t| {
+            t.extract::<i64>()
+                .ok()
+                .and_then(|t| usize::try_from(t).ok())
+                .ok_or(())
+                .and_then(|t| groombake::budget::check_threads(t).map_err(|_| ()))
+                .map_err(|()| {
+                    bad_input(format!(
+                        "threads must be 1 to {}",
+                        groombake::budget::MAX_THREADS
+                    ))
+                })
+        })
+        .transpose()?;
     let loaded;
     let timeline_ref = match timeline.cast::<PyTimeline>() {
         Ok(t) => t.borrow(),
@@ -615,6 +726,23 @@ fn bake(
         monitor: Some(monitor.clone()),
         ..BakeOptions::default()
     };
+    let stage_names: Vec<String> = engine_timeline
+        .file
+        .stages
+        .get_ref()
+        .iter()
+        .map(|s| {
+            s.name
+                .clone()
+                .unwrap_or_else(|| s.kind.get_ref().name().into())
+        })
+        .collect();
+    let mut reporter = Progress {
+        with_stage: progress.as_ref().is_some_and(takes_stage),
+        names: stage_names,
+        next_stage: 0,
+        last: -1.0,
+    };
     let fraction = |m: &BakeMonitor| {
         let total = m.steps_total.load(Ordering::Relaxed);
         if total == 0 {
@@ -626,7 +754,6 @@ fn bake(
     let outcome = std::thread::scope(|scope| -> PyResult<_> {
         let worker = scope.spawn(|| run_bake(engine_timeline, &options));
         let mut interrupted: Option<PyErr> = None;
-        let mut last = -1.0f64;
         while !worker.is_finished() {
             // Wait without the GIL; then, holding it, report and check Ctrl-C.
             py.detach(|| std::thread::sleep(Duration::from_millis(50)));
@@ -638,14 +765,11 @@ fn bake(
                 interrupted = Some(e);
                 continue;
             }
-            let now = fraction(&monitor);
             if let Some(callback) = &progress {
-                if now > last {
-                    last = now;
-                    if let Err(e) = callback.call1((now,)) {
-                        monitor.cancel();
-                        interrupted = Some(e);
-                    }
+                let stage = monitor.stage.load(Ordering::Relaxed);
+                if let Err(e) = reporter.update(callback, fraction(&monitor), stage) {
+                    monitor.cancel();
+                    interrupted = Some(e);
                 }
             }
         }
@@ -657,13 +781,62 @@ fn bake(
         }
         Ok(result)
     })?;
-    let report = outcome.map_err(engine_bake_error)?.report;
+    let mut report = outcome.map_err(engine_bake_error)?.report;
+    report.finish_ok(engine_timeline);
     if let Some(callback) = &progress {
-        callback.call1((1.0f64,))?;
+        let last = reporter.names.len().saturating_sub(1);
+        reporter.update(callback, 1.0, last)?;
     }
     let value = serde_json::to_value(&report).map_err(|e| BakeError::new_err(e.to_string()))?;
     let data = to_python(py, &value)?.cast_into::<PyDict>()?.unbind();
     Ok(PyReport { data })
+}
+
+/// Calls a progress callback: once for every stage as it starts (also a
+/// stage shorter than the 50 ms between polls, with the fraction of the
+/// moment), and whenever the fraction grew.
+struct Progress {
+    /// `callback(fraction, stage)`, else `callback(fraction)`.
+    with_stage: bool,
+    names: Vec<String>,
+    /// The first stage not yet reported.
+    next_stage: usize,
+    last: f64,
+}
+
+impl Progress {
+    fn update(&mut self, callback: &Bound<'_, PyAny>, fraction: f64, stage: usize) -> PyResult<()> {
+        let stage = stage.min(self.names.len().saturating_sub(1));
+        if self.with_stage {
+            while self.next_stage <= stage && self.next_stage < self.names.len() {
+                let name = self.names[self.next_stage].clone();
+                callback.call1((fraction, name))?;
+                self.next_stage += 1;
+                self.last = fraction;
+            }
+        }
+        if fraction > self.last {
+            self.last = fraction;
+            if self.with_stage {
+                let name = self.names.get(stage).cloned().unwrap_or_default();
+                callback.call1((fraction, name))?;
+            } else {
+                callback.call1((fraction,))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether a progress callback takes the stage too: its signature binds
+/// two arguments. One without a signature Python can read gets the
+/// fraction only, as before the stage was passed.
+fn takes_stage(callback: &Bound<'_, PyAny>) -> bool {
+    let py = callback.py();
+    py.import("inspect")
+        .and_then(|inspect| inspect.call_method1("signature", (callback,)))
+        .and_then(|signature| signature.call_method1("bind", (0.0f64, "")))
+        .is_ok()
 }
 
 /// groombake: bakes styled hair grooms from the chemistry of hair.

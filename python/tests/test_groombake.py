@@ -158,6 +158,36 @@ def test_bad_dict_names_the_key_path():
         gb.Timeline.from_dict({**good, "groom": {"generate": {"layout": "swatch", "strands": None}}})
 
 
+def test_the_report_is_finished_as_the_cli_writes_it(tmp_path):
+    timeline = write_timeline(tmp_path)
+    subprocess.run(
+        [cli_binary(), "bake", str(timeline), "--out", str(tmp_path / "cli"), "-q", "--report", str(tmp_path / "r.json")],
+        check=True,
+    )
+    cli = __import__("json").loads((tmp_path / "r.json").read_text())
+    report = gb.bake(str(timeline), out=str(tmp_path / "py"), threads=1)
+    assert report.status == "ok" and report.exit_code == 0 and report.error is None
+    assert report.started <= report.finished and report.finished.endswith("Z"), report.finished
+    assert report.peak_memory_bytes > 0
+    assert [o["sha256"] for o in report.outputs] == [o["sha256"] for o in cli["outputs"]]
+    assert report.timeline_sha256 == cli["timeline_sha256"]
+    assert report.warnings == cli["warnings"]
+    assert set(report.to_dict()) == set(cli), "the same keys as the CLI's report"
+    names = dir(report)
+    for key in ["status", "finished", "outputs", "stages", "sources", "warnings", "to_dict"]:
+        assert key in names, key
+
+
+def test_progress_gets_the_stage_and_the_fraction(tmp_path):
+    seen = []
+    gb.bake(str(write_timeline(tmp_path, dry=1.5)), out=str(tmp_path), progress=lambda f, stage: seen.append((f, stage)))
+    stages = [stage for _, stage in seen]
+    assert stages[0] == "wet" and stages[-1] == "dry", seen
+    assert stages == sorted(stages, key=["wet", "dry"].index), "stages in order"
+    fractions = [f for f, _ in seen]
+    assert all(b >= a for a, b in zip(fractions, fractions[1:])) and fractions[-1] == 1.0
+
+
 def test_progress_is_monotone_and_reaches_one(tmp_path):
     values = []
     gb.bake(str(write_timeline(tmp_path, dry=1.5)), out=str(tmp_path), progress=values.append)

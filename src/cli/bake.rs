@@ -14,19 +14,20 @@ use std::sync::Arc;
 #[derive(Debug, Args)]
 pub struct BakeArgs {
     /// The timeline (TOML).
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     timeline: PathBuf,
     /// Folder that relative export paths are written under (default: the current folder).
-    #[arg(long, default_value = ".")]
+    #[arg(long, default_value = ".", value_hint = clap::ValueHint::DirPath)]
     out: PathBuf,
     /// Worker threads (default: one per core; at most 1024). Outputs are identical for any count.
-    #[arg(long, value_parser = parse_threads)]
+    #[arg(short = 'j', long, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Seed of the random processes (overrides the timeline's `seed`).
     #[arg(long)]
     seed: Option<u64>,
-    /// Write a JSON report (status, inputs' and outputs' SHA-256, stages, timings, warnings),
-    /// on failure too.
-    #[arg(long)]
+    /// Write a report (status, inputs' and outputs' SHA-256, stages, timings, warnings),
+    /// on failure too: JSON, an HTML page for R.html, or JSON on stdout for `-`.
+    #[arg(long, value_name = "R.json|R.html|-", value_hint = clap::ValueHint::FilePath)]
     report: Option<PathBuf>,
     /// No progress bars.
     #[arg(short, long)]
@@ -67,7 +68,7 @@ pub fn classify(error: BakeError) -> anyhow::Error {
 /// SIGINT, SIGTERM and SIGHUP store their number in `stop` (the bake's
 /// [`BakeMonitor::stop`]) so the bake stops at its next step and removes
 /// its temporaries; a second such signal ends the process at once.
-fn stop_on_signals(stop: &Arc<AtomicUsize>) -> anyhow::Result<()> {
+pub(super) fn stop_on_signals(stop: &Arc<AtomicUsize>) -> anyhow::Result<()> {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     for number in [SIGINT, SIGTERM, SIGHUP] {
         let stop_now = Arc::new(std::sync::atomic::AtomicBool::new(false));
@@ -87,8 +88,8 @@ pub struct ReportUnusable(String);
 
 pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     let mut report = BakeReport::start(&args.timeline);
-    let (mut sheet, mut snapshots) = (None, Vec::new());
-    let result = bake_and_report(&args, &mut report, &mut sheet, &mut snapshots);
+    let (mut sheet, mut samples) = (None, Vec::new());
+    let result = bake_and_report(&args, &mut report, &mut sheet, &mut samples);
     let Some(path) = &args.report else {
         return result;
     };
@@ -111,8 +112,14 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     };
     let code = result.as_ref().map_or_else(super::exit_code_for, |_| 0);
     report.finish(status, code, error);
-    let written = if wants_html(Some(path)) {
-        let page = groombake::report_html::bake_page(&report, &snapshots, sheet.as_deref());
+    let written = if is_stdout(path) {
+        print_report(&report)
+    } else if wants_html(Some(path)) {
+        let folder = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        let page = groombake::report_html::bake_page(&report, &samples, sheet.as_deref(), folder);
         groom::AtomicFile::create(path).and_then(|mut file| {
             std::io::Write::write_all(&mut file, page.as_bytes())?;
             file.commit()
@@ -122,6 +129,19 @@ pub fn run_bake(args: BakeArgs) -> anyhow::Result<()> {
     }
     .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
     result.and(written)
+}
+
+/// Whether the report goes to stdout (`--report -`).
+fn is_stdout(path: &std::path::Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// The JSON report on stdout, for a pipe (`--report - | jq`).
+fn print_report(report: &BakeReport) -> std::io::Result<()> {
+    let mut out = std::io::stdout().lock();
+    serde_json::to_writer_pretty(&mut out, report)?;
+    std::io::Write::write_all(&mut out, b"\n")?;
+    std::io::Write::flush(&mut out)
 }
 
 /// Whether the report path asks for the HTML page (`--report R.html`).
@@ -134,7 +154,7 @@ fn bake_and_report(
     args: &BakeArgs,
     report: &mut BakeReport,
     html: &mut Option<Vec<u8>>,
-    snapshots: &mut Vec<(String, groom::Groom)>,
+    samples: &mut Vec<groombake::timeline::plots::PlotSample>,
 ) -> anyhow::Result<()> {
     let monitor = Arc::new(BakeMonitor::default());
     stop_on_signals(&monitor.stop)?;
@@ -147,19 +167,23 @@ fn bake_and_report(
         progress: !args.quiet && std::io::stderr().is_terminal(),
         dry: false,
         monitor: Some(monitor),
-        report: args.report.clone(),
+        // stdout is no file to check or replace.
+        report: args.report.clone().filter(|p| !is_stdout(p)),
         strict: args.strict,
     };
     let outcome = bake(&timeline, &options).map_err(classify)?;
     if wants_html(args.report.as_deref()) {
         *html = Some(sheet_png(&timeline, &outcome.snapshots, &outcome.rods)?);
-        *snapshots = outcome.snapshots;
+        *samples = outcome.plot_samples;
     }
     let started = std::mem::take(&mut report.started);
     *report = outcome.report;
     report.started = started;
     report.warnings.splice(0..0, timeline.warnings());
     if !args.quiet {
+        if let Some(radius) = &report.fibre_radius {
+            eprintln!("fibre radius {}", radius.describe());
+        }
         for stage in &report.stages {
             eprintln!(
                 "stage {} {:<8} {:>7.3} s simulated in {:.2} s",
@@ -167,11 +191,14 @@ fn bake_and_report(
             );
         }
         for output in &report.outputs {
-            eprintln!("wrote {} ({} bytes)", output.path, output.bytes);
+            match &output.written_in {
+                Some(units) => eprintln!("wrote {} ({} bytes, {units})", output.path, output.bytes),
+                None => eprintln!("wrote {} ({} bytes)", output.path, output.bytes),
+            }
         }
     }
     for warning in &report.warnings {
-        eprintln!("warning: {warning}");
+        eprintln!("warning: {}", super::shortened(&super::printable(warning)));
     }
     Ok(())
 }
@@ -191,8 +218,13 @@ pub fn run_validate(args: ValidateArgs) -> anyhow::Result<()> {
     let timeline = Timeline::load(&args.timeline).map_err(|e| BadInput(e.to_string()))?;
     plan_outputs(&timeline, &BakeOptions::default()).map_err(classify)?;
     let prepared = prepare(&timeline, None).map_err(classify)?;
-    for warning in timeline.warnings() {
-        eprintln!("warning: {warning}");
+    eprintln!("fibre radius {}", prepared.fibre_radius.describe());
+    for warning in timeline
+        .warnings()
+        .into_iter()
+        .chain(prepared.fibre_radius.warning())
+    {
+        eprintln!("warning: {}", super::shortened(&super::printable(&warning)));
     }
     let unsimulated = groombake::sim::unsimulated_strands(&prepared.strands);
     if let Some(first) = unsimulated.first() {

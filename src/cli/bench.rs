@@ -34,7 +34,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 32)]
     vertices: usize,
     /// Worker threads (default: all cores; at most 1024).
-    #[arg(long, value_parser = super::bake::parse_threads)]
+    #[arg(short = 'j', long, value_parser = super::bake::parse_threads)]
     threads: Option<usize>,
     /// Elastic model: `physical` (real hair, direct solve) or `paper`.
     #[arg(long, default_value = "physical", value_parser = ["physical", "paper"])]
@@ -54,6 +54,10 @@ pub struct BenchArgs {
     /// Hair-hair penalty strength alpha of (20), 0-10 (off by default).
     #[arg(long, value_name = "ALPHA")]
     hair_hair: Option<f32>,
+    /// Coulomb friction coefficient between hairs, 0-1, with pairwise
+    /// --hair-hair and the physical model (off by default).
+    #[arg(long, value_name = "MU")]
+    hair_friction: Option<f32>,
     /// Hair-hair mode: `pairwise` (the penalty of (20), strength from
     /// --hair-hair) or `volumetric` (a grid of hair density and velocity,
     /// default settings: 5 mm cells, smoothing 20 /s, repulsion 10 m^2/s^2).
@@ -103,6 +107,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             return Err(BadInput("--hair-hair must be in [0, 10]".into()).into());
         }
     }
+    if let Some(mu) = args.hair_friction {
+        if !(mu.is_finite() && (0.0..=1.0).contains(&mu)) {
+            return Err(BadInput("--hair-friction must be in [0, 1]".into()).into());
+        }
+        if args.hair_hair.is_none() || args.hair_hair_mode != "pairwise" || args.model == "paper" {
+            return Err(BadInput(
+                "--hair-friction needs pairwise --hair-hair and the physical model".into(),
+            )
+            .into());
+        }
+    }
     let model = if args.model == "paper" {
         Model::Paper
     } else {
@@ -147,6 +162,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             iterations,
             tolerance,
             hair_hair: args.hair_hair.filter(|_| args.hair_hair_mode == "pairwise"),
+            hair_friction: args.hair_friction,
             volumetric: (args.hair_hair_mode == "volumetric" && args.hair_hair.is_some())
                 .then(groombake::sim::Volumetric::default),
             collider,
@@ -187,6 +203,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             "tolerance": workload.tolerance,
             "solves_per_strand_step": report.solves_per_strand_step(),
             "hair_hair": workload.hair_hair,
+            "hair_friction": workload.hair_friction,
             "hair_hair_mode": if workload.volumetric.is_some() { "volumetric" } else { "pairwise" },
             "render": workload.render,
             "pillow": workload.pillow,

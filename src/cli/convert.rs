@@ -1,6 +1,6 @@
-//! `groombake convert IN OUT [--units U] [--up y|z] [--frame F]`.
+//! `groombake convert IN OUT [--target T | --units U --up y|z] [--frame F]`.
 
-use super::BadInput;
+use super::{values, BadInput};
 use clap::Args;
 use groom::{Units, UpAxis};
 use std::path::PathBuf;
@@ -8,22 +8,31 @@ use std::path::PathBuf;
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
     /// The groom to read.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     input: PathBuf,
     /// The file to write; its extension picks the format.
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     output: PathBuf,
+    /// The program the output is for (unreal, maya, houdini, blender, usd):
+    /// a preset of units, up axis and attribute names (docs/formats.md);
+    /// --units and --up override its units and axis.
+    #[arg(long)]
+    target: Option<exporters::Target>,
     /// Units of the output (m, cm, mm, in, or metres per unit); default: the
-    /// format's (glTF m; USD the input's; .abc, .hair, .data, .obj cm).
-    #[arg(long)]
+    /// target's, else the format's (glTF, .abc, .obj m; USD the input's;
+    /// .hair, .data cm).
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     units: Option<Units>,
-    /// Up axis of the output; default: the input's.
-    #[arg(long)]
+    /// Up axis of the output; default: the target's, else Y (USD: the
+    /// input's).
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     up: Option<UpAxis>,
     /// Units the input is in, for formats that do not record them (.hair,
     /// .data, .obj: cm by default; .abc: by the writing application).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]
     source_units: Option<Units>,
     /// Up axis the input uses, for formats that do not say (default y).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<UpAxis>(values::UP))]
     source_up: Option<UpAxis>,
     /// Write only this frame (0-based) of an animated input, as a static groom.
     #[arg(long)]
@@ -36,7 +45,12 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     super::check_output_path(&args.output)?;
+    // Temporaries of killed converts to the same file (a kill or a signal
+    // leaves `.NAME.PID.tmp`): removed as a bake removes its own.
+    groombake::timeline::outputs::remove_stale_temporaries(std::slice::from_ref(&args.output));
     let mut grooms = super::read_sequence(&args.input)?;
+    // What the reader left out, before anything is written.
+    super::warn_or_refuse(&super::losses(&args.input, &grooms), args.strict)?;
     for groom in &mut grooms {
         if let Some(units) = args.source_units {
             groom.units = units;
@@ -60,15 +74,33 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
         return Err(BadInput(format!("{}: no groom", args.input.display())).into());
     };
     warn_of_dropped_frames(&args, &groom);
-    let units = args
-        .units
-        .unwrap_or_else(|| exporters::default_units(&args.output, groom.units));
-    let up = args.up.unwrap_or(groom.up_axis);
-    groom.convert_to(units, up);
-    let warnings = exporters::warnings(&args.output, &groom, units);
+    let destination = destination_of(&args, &groom);
+    groom.convert_to(destination.units, destination.up);
+    let mut warnings = exporters::warnings(&args.output, &groom, destination.units);
+    warnings.extend(exporters::order_and_pose_warnings(&args.output, &groom));
     super::warn_or_refuse(&warnings, args.strict)?;
-    exporters::write(&args.output, &groom)?;
+    exporters::write_as(&args.output, &groom, destination.attributes)?;
+    print_written(&args.output, &groom);
     Ok(())
+}
+
+fn destination_of(args: &ConvertArgs, groom: &groom::Groom) -> exporters::Destination {
+    exporters::destination(
+        &args.output,
+        args.target,
+        args.units,
+        args.up,
+        groom.units,
+        groom.up_axis,
+    )
+}
+
+/// Alembic and `.obj` record neither units nor axis in a way other
+/// programs read: say what the numbers are.
+fn print_written(output: &std::path::Path, groom: &groom::Groom) {
+    if let Some(written) = exporters::written_in(output, groom.units, groom.up_axis) {
+        eprintln!("groombake: wrote {}: {written}", output.display());
+    }
 }
 
 /// Frame `frame` (0-based, counted over the whole sequence) as a static groom.
@@ -94,13 +126,13 @@ fn frame_of(
 
 /// Writes a groom whose topology changes over time, every topology kept.
 fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> anyhow::Result<()> {
-    let first_units = grooms.first().map_or(Units::METERS, |g| g.units);
-    let units = args
-        .units
-        .unwrap_or_else(|| exporters::default_units(&args.output, first_units));
+    let Some(first) = grooms.first() else {
+        return Err(BadInput(format!("{}: no groom", args.input.display())).into());
+    };
+    let units = destination_of(args, first).units;
     let mut warnings: Vec<String> = Vec::new();
     for groom in &mut grooms {
-        let up = args.up.unwrap_or(groom.up_axis);
+        let up = destination_of(args, groom).up;
         groom.convert_to(units, up);
         for warning in exporters::warnings(&args.output, groom, units) {
             if !warnings.contains(&warning) {

@@ -4,7 +4,7 @@
 
 use super::BadInput;
 use clap::Args;
-use groombake::diff::{diff, DiffOptions, DiffReport};
+use groombake::diff::{diff_sequences, DiffOptions, DiffReport};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -81,14 +81,15 @@ pub fn run(args: DiffArgs) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let a = super::read_groom(&args.a)?;
-    let b = super::read_groom(&args.b)?;
+    // Files whose curve counts change over time compare stretch by stretch.
+    let a = super::read_sequence(&args.a)?;
+    let b = super::read_sequence(&args.b)?;
     let options = DiffOptions {
         tolerance: args.tolerance,
         listed: args.show,
         ignore: args.ignore,
     };
-    let report = diff(&a, &b, &options);
+    let report = diff_sequences(&a, &b, &options);
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer_pretty(&mut out, &report)?;

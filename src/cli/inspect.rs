@@ -1,4 +1,6 @@
-//! `groombake inspect FILE [--json]`.
+//! `groombake inspect FILE [--json]`: a groom's facts, or a collider
+//! mesh's (`.obj`, `.glb`, `.gltf` with triangles and no curves): its
+//! triangles and bounds, to place it against the groom.
 
 use clap::Args;
 use groom::Groom;
@@ -8,7 +10,8 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct InspectArgs {
-    /// The groom file.
+    /// The groom file, or a collider mesh (.obj, .glb, .gltf).
+    #[arg(value_hint = clap::ValueHint::FilePath)]
     file: PathBuf,
     /// Print a JSON object instead of text.
     #[arg(long)]
@@ -107,11 +110,86 @@ fn topology(grooms: &[Groom]) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// A mesh file as a collider reads it: `None` when it is no mesh (then
+/// the groom reader's error stands).
+fn mesh_of(path: &std::path::Path) -> Option<importers::mesh::Mesh> {
+    let extension = importers::extension_of(path);
+    if !matches!(extension.as_str(), "obj" | "glb" | "gltf") {
+        return None;
+    }
+    importers::mesh::read_mesh(path).ok()
+}
+
+/// Prints a collider mesh's triangles and bounds (metres, as a collider
+/// reads it, before its `scale`).
+fn inspect_mesh(args: &InspectArgs, mesh: &importers::mesh::Mesh) -> anyhow::Result<()> {
+    let mut min = [f32::INFINITY; 3];
+    let mut max = [f32::NEG_INFINITY; 3];
+    for v in &mesh.vertices {
+        for k in 0..3 {
+            min[k] = min[k].min(v[k]);
+            max[k] = max[k].max(v[k]);
+        }
+    }
+    let size: Vec<f32> = (0..3).map(|k| max[k] - min[k]).collect();
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        let summary = json!({
+            "kind": "mesh",
+            "format": importers::extension_of(&args.file),
+            "triangles": mesh.triangles.len(),
+            "vertices": mesh.vertices.len(),
+            "bounds": {"min": min, "max": max},
+            "size": size,
+            "units": "m",
+            "uvs": mesh.corner_uvs.is_some(),
+        });
+        serde_json::to_writer_pretty(&mut out, &summary)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(out, "file        {}", args.file.display())?;
+    writeln!(
+        out,
+        "format      mesh ({}): a collider, no curves",
+        importers::extension_of(&args.file)
+    )?;
+    writeln!(out, "triangles   {}", mesh.triangles.len())?;
+    writeln!(out, "vertices    {}", mesh.vertices.len())?;
+    writeln!(out, "bounds      {min:?} .. {max:?}")?;
+    writeln!(
+        out,
+        "size        {:.4} x {:.4} x {:.4} m (as a collider reads it, times its `scale`)",
+        size[0], size[1], size[2]
+    )?;
+    writeln!(
+        out,
+        "uvs         {}",
+        if mesh.corner_uvs.is_some() {
+            "yes"
+        } else {
+            "no"
+        }
+    )?;
+    Ok(())
+}
+
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    let grooms = super::read_sequence(&args.file)?;
+    let grooms = match super::read_sequence(&args.file) {
+        Ok(grooms) => grooms,
+        Err(error) => match mesh_of(&args.file) {
+            Some(mesh) => return inspect_mesh(&args, &mesh),
+            None => return Err(error),
+        },
+    };
     let groom = &grooms[0];
     let mut summary = summary(groom);
     summary["topology"] = json!(topology(&grooms));
+    let losses = super::losses(&args.file, &grooms);
+    summary["warnings"] = json!(losses);
+    for loss in &losses {
+        eprintln!("groombake: warning: {loss}");
+    }
     if grooms.len() > 1 {
         // Frames of the whole sequence; the other facts are of the first
         // topology.

@@ -10,6 +10,7 @@ mod generate;
 mod inspect;
 mod install;
 mod preview;
+mod values;
 
 use clap::{CommandFactory, Parser, Subcommand};
 use std::process::ExitCode;
@@ -18,7 +19,9 @@ use std::process::ExitCode;
 #[command(
     name = "groombake",
     version,
-    about = "Bakes styled hair grooms from the chemistry of hair"
+    about = "Bakes styled hair grooms from the chemistry of hair",
+    // A bare `groombake` shows the commands, not one line.
+    arg_required_else_help = true
 )]
 pub struct Args {
     #[command(subcommand)]
@@ -62,16 +65,24 @@ pub struct BadInput(pub String);
 pub struct Interrupted(pub usize);
 
 /// Parses the command line; on `--help`/`--version` prints clap's text and
-/// returns 0; on a usage error prints one line, `groombake: <where>:
-/// <what>` (the subcommand and argument, and clap's first line), and
-/// returns 2.
+/// returns 0; with no arguments prints the help (the command list) and
+/// returns 2; on a usage error prints one line, `groombake: <where>:
+/// <what>` (the subcommand and argument, clap's message with the names of
+/// missing arguments and its "a similar ... exists" tip), and returns 2.
 pub fn parse() -> Result<Args, ExitCode> {
     Args::try_parse().map_err(|error| {
         if !error.use_stderr() {
             let _ = error.print();
             return ExitCode::SUCCESS;
         }
-        eprintln!("groombake: {}", printable(&usage_error_line(&error)));
+        if error.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+            let _ = error.print();
+            return ExitCode::from(2);
+        }
+        eprintln!(
+            "groombake: {}",
+            shortened(&printable(&usage_error_line(&error)))
+        );
         ExitCode::from(2)
     })
 }
@@ -80,13 +91,25 @@ pub fn parse() -> Result<Args, ExitCode> {
 fn usage_error_line(error: &clap::Error) -> String {
     use clap::error::{ContextKind, ContextValue};
     let rendered = error.render().to_string();
-    let what = rendered
-        .lines()
-        .find(|l| !l.trim().is_empty())
-        .unwrap_or("bad usage")
-        .trim_start_matches("error:")
-        .trim()
-        .to_string();
+    // clap's message up to its usage lines: the error, then the missing
+    // arguments' names and a tip, each on lines of their own.
+    let mut what = String::new();
+    for line in rendered.lines().map(str::trim) {
+        if line.starts_with("Usage:") || line.starts_with("For more information") {
+            break;
+        }
+        let line = line.trim_start_matches("error:").trim();
+        if line.is_empty() {
+            continue;
+        }
+        if !what.is_empty() {
+            what.push_str(if line.starts_with("tip:") { "; " } else { " " });
+        }
+        what.push_str(line);
+    }
+    if what.is_empty() {
+        what.push_str("bad usage");
+    }
     let subcommand = std::env::args()
         .nth(1)
         .filter(|a| Args::command().find_subcommand(a).is_some());
@@ -117,6 +140,45 @@ pub fn printable(text: &str) -> String {
     out
 }
 
+/// The longest error or warning line, in characters (after `groombake: `).
+pub const MAX_LINE: usize = 300;
+/// A word (a run without spaces: a token, a path) longer than this many
+/// characters is shown by its two ends and its length.
+const MAX_WORD: usize = 120;
+/// Characters kept from each end of a shortened word.
+const WORD_ENDS: usize = 40;
+
+/// A line of at most [`MAX_LINE`] characters: each word over [`MAX_WORD`]
+/// (a 1 MB token from a file) becomes its two ends and its length in
+/// bytes, and a line still too long keeps its start and end.
+pub fn shortened(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4 * MAX_LINE));
+    for (i, word) in text.split(' ').enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        let count = word.chars().count();
+        if count > MAX_WORD {
+            let head: String = word.chars().take(WORD_ENDS).collect();
+            let tail: String = word.chars().skip(count - WORD_ENDS).collect();
+            // The length of the token itself, without the quotes around it.
+            let token = word.trim_matches(|c| matches!(c, '\'' | '"' | '`'));
+            out.push_str(&format!("{head}...{tail} ({} bytes)", token.len()));
+        } else {
+            out.push_str(word);
+        }
+    }
+    let count = out.chars().count();
+    if count <= MAX_LINE {
+        return out;
+    }
+    let marker = format!(" ...({} characters)... ", count);
+    let keep = MAX_LINE - marker.len();
+    let head: String = out.chars().take(keep * 2 / 3).collect();
+    let tail: String = out.chars().skip(count - (keep - keep * 2 / 3)).collect();
+    format!("{head}{marker}{tail}")
+}
+
 /// An error and its causes on one line, each cause once: errors that show
 /// their source in their own text are not followed by it again.
 pub fn message_of(error: &anyhow::Error) -> String {
@@ -131,7 +193,7 @@ pub fn message_of(error: &anyhow::Error) -> String {
         }
         message.push_str(&text);
     }
-    printable(&message)
+    shortened(&printable(&message))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -187,7 +249,7 @@ pub fn warn_or_refuse(warnings: &[String], strict: bool) -> anyhow::Result<()> {
         }
     }
     for warning in warnings {
-        eprintln!("groombake: warning: {warning}");
+        eprintln!("groombake: warning: {}", shortened(&printable(warning)));
     }
     Ok(())
 }
@@ -210,6 +272,19 @@ pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>
         }
     }
     Ok(grooms)
+}
+
+/// What the readers could not keep of the grooms' file (`Provenance::losses`),
+/// each line once (a changing topology is read once per stretch).
+pub fn losses(file: &std::path::Path, grooms: &[groom::Groom]) -> Vec<String> {
+    let mut all: Vec<String> = Vec::new();
+    for loss in grooms.iter().flat_map(|g| &g.provenance.losses) {
+        let line = format!("{}: {loss}", file.display());
+        if !all.contains(&line) {
+            all.push(line);
+        }
+    }
+    all
 }
 
 /// Reads a groom file and refuses one with fatal problems, naming the first.

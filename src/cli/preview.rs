@@ -1,17 +1,18 @@
 //! `groombake preview FILE -o OUT.png [--frame F | --frames a,b,c] [--color ATTR]
-//! [--size WxH] [--view front|side|top|persp] [--rest]`.
+//! [--size WxH | --panel-size WxH] [--view front|side|top|persp] [--rest]`.
 
-use super::BadInput;
+use super::{values, BadInput};
 use clap::Args;
 use groombake::preview::{self, PreviewError, PreviewOptions, SheetEntry, View, MAX_SIZE};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
 pub struct PreviewArgs {
-    /// The groom file.
+    /// The groom file, or a timeline (TOML) to draw its stages.
+    #[arg(value_name = "FILE|TIMELINE", value_hint = clap::ValueHint::FilePath)]
     file: PathBuf,
     /// The picture to write (PNG).
-    #[arg(short, long)]
+    #[arg(short, long, value_hint = clap::ValueHint::FilePath)]
     output: PathBuf,
     /// Draw this time sample (0-based) instead of the rest pose.
     #[arg(long, conflicts_with = "frames")]
@@ -22,13 +23,18 @@ pub struct PreviewArgs {
     /// Colour strands by this scalar attribute (blue = low, red = high), with a legend.
     #[arg(long)]
     color: Option<String>,
-    /// Picture size in pixels, WIDTHxHEIGHT (each 1 to 16384).
+    /// Size of the whole picture in pixels, WIDTHxHEIGHT (each 1 to 16384);
+    /// a sheet's pictures and labels share it.
     #[arg(long, default_value = "1024x1024", value_parser = parse_size)]
     size: (u32, u32),
+    /// Size of each picture of a sheet instead, WIDTHxHEIGHT: the sheet
+    /// grows with their count (labels and gutters added).
+    #[arg(long, value_parser = parse_size, conflicts_with = "size", value_name = "WxH")]
+    panel_size: Option<(u32, u32)>,
     /// Where the camera looks from (Y up): front, side, top or persp. Default:
     /// a timeline's `[preview] view`, else the axis view that shows most of
     /// the change (a timeline, an animated file) or of the groom (a still one).
-    #[arg(long)]
+    #[arg(long, value_parser = values::suggest::<View>(values::VIEWS))]
     view: Option<View>,
     /// Draw the plastic rest shape: of a `state` export, or of a timeline's
     /// result (what the hair would look like with nothing holding it).
@@ -79,8 +85,8 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         None => preview::view_showing_spread(&groom),
     });
     let options = PreviewOptions {
-        width: args.size.0,
-        height: args.size.1,
+        width: args.panel_size.unwrap_or(args.size).0,
+        height: args.panel_size.unwrap_or(args.size).1,
         view,
         frame: args.frame,
         color_by: args.color.clone(),
@@ -101,11 +107,24 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
                 surfaces: &[],
             })
             .collect();
-        preview::render_sheet(&entries, &options)
+        sheet(&args, &entries, &options)
     }
     .map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
+}
+
+/// A sheet of `--size` in all, or of pictures of `--panel-size` each.
+fn sheet(
+    args: &PreviewArgs,
+    entries: &[SheetEntry],
+    options: &groombake::preview::PreviewOptions,
+) -> Result<groombake::preview::Image, PreviewError> {
+    if args.panel_size.is_some() {
+        preview::render_sheet(entries, options)
+    } else {
+        preview::render_sheet_within(entries, options)
+    }
 }
 
 /// The rest shape of a `state` export: the state rebuilt (metres, Y up) and
@@ -161,8 +180,7 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
     };
     let outcome = bake(&timeline, &options).map_err(super::bake::classify)?;
     let mut preview_options = sheet_options(&timeline, &outcome.snapshots);
-    preview_options.width = args.size.0;
-    preview_options.height = args.size.1;
+    (preview_options.width, preview_options.height) = args.panel_size.unwrap_or(args.size);
     if let Some(view) = args.view {
         preview_options.view = view;
     }
@@ -202,8 +220,8 @@ fn preview_timeline(args: &PreviewArgs) -> anyhow::Result<()> {
             surfaces,
         })
         .collect();
-    let image = preview::render_sheet(&entries, &preview_options)
-        .map_err(|error| explain(&args.file, error))?;
+    let image =
+        sheet(args, &entries, &preview_options).map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
 }

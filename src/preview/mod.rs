@@ -5,6 +5,7 @@
 //! pictures with labels; deterministic PNG files.
 
 mod camera;
+mod fit;
 mod font;
 mod raster;
 mod shadow;
@@ -170,6 +171,12 @@ pub enum PreviewError {
     },
     #[error("the groom has more than 4,294,967,295 points, too many to preview")]
     TooManyPoints,
+    #[error("a picture of {width}x{height} cannot hold a sheet of {count} labelled pictures")]
+    SheetTooSmall {
+        count: usize,
+        width: u32,
+        height: u32,
+    },
     #[error("a contact sheet of {count} pictures of {width}x{height} would exceed {MAX_SHEET_PIXELS} pixels")]
     SheetTooLarge {
         count: usize,
@@ -303,6 +310,8 @@ fn smooth(groom: &Groom) -> std::borrow::Cow<'_, Groom> {
     groom::curves::tessellate(groom, 8)
 }
 
+pub use fit::render_sheet_within;
+
 /// Draws several poses (of one groom or several) with one camera and one
 /// colour range, so they compare, and lays them out with their labels.
 pub fn render_sheet(
@@ -341,17 +350,49 @@ fn check_sheet_size(count: usize, width: u32, height: u32) -> Result<(), Preview
 /// Gap between pictures of a sheet, pixels.
 const GUTTER: u32 = 4;
 
+/// How [`contact_sheet`] lays out `count` pictures of `cell_width` x
+/// `cell_height`: columns, label height and the sheet's size.
+struct SheetLayout {
+    columns: u32,
+    label_height: u32,
+    scale: u32,
+    width: u32,
+    height: u32,
+}
+
+fn sheet_layout(count: usize, cell_width: u32, cell_height: u32) -> SheetLayout {
+    let scale = text_scale(cell_width.min(cell_height));
+    let label_height = font::GLYPH_HEIGHT * scale + 6 * scale;
+    let count = u32::try_from(count.max(1)).unwrap_or(u32::MAX);
+    let columns = count.min(4);
+    let rows = count.div_ceil(columns);
+    SheetLayout {
+        columns,
+        label_height,
+        scale,
+        width: columns * cell_width + (columns + 1) * GUTTER,
+        height: rows * (cell_height + label_height) + (rows + 1) * GUTTER,
+    }
+}
+
+/// The size of a contact sheet of `count` pictures of `cell_width` x
+/// `cell_height` (labels and gutters included).
+pub fn sheet_size(count: usize, cell_width: u32, cell_height: u32) -> (u32, u32) {
+    let layout = sheet_layout(count, cell_width, cell_height);
+    (layout.width, layout.height)
+}
+
 /// Lays pictures out side by side (up to four a row), each under its label.
 pub fn contact_sheet(pictures: &[(String, Image)]) -> Image {
     let cell_width = pictures.iter().map(|(_, i)| i.width).max().unwrap_or(1);
     let cell_height = pictures.iter().map(|(_, i)| i.height).max().unwrap_or(1);
-    let scale = text_scale(cell_width.min(cell_height));
-    let label_height = font::GLYPH_HEIGHT * scale + 6 * scale;
-    let count = pictures.len().max(1) as u32;
-    let columns = count.min(4);
-    let rows = count.div_ceil(columns);
-    let width = columns * cell_width + (columns + 1) * GUTTER;
-    let height = rows * (cell_height + label_height) + (rows + 1) * GUTTER;
+    let SheetLayout {
+        columns,
+        label_height,
+        scale,
+        width,
+        height,
+    } = sheet_layout(pictures.len(), cell_width, cell_height);
     let mut sheet = Image::new(width, height, [28, 28, 30]);
     for (index, (label, picture)) in pictures.iter().enumerate() {
         let index = index as u32;

@@ -292,6 +292,7 @@ fn wider_hair_covers_more_pixels() {
         groom.frames.push(Frame {
             time: 0.0,
             points: vec![[-1.0, -1.0, 0.0], [1.0, 1.0, 0.0]],
+            attributes: Vec::new(),
         });
         hair_pixels(&render(&groom, &options(200, 200)).unwrap()).len()
     };
@@ -310,10 +311,12 @@ fn frames_pick_the_pose_and_share_the_camera() {
     groom.frames.push(Frame {
         time: 0.0,
         points: vec![[-1.0, 0.0, 0.0], [-1.0, 0.5, 0.0]],
+        attributes: Vec::new(),
     });
     groom.frames.push(Frame {
         time: 1.0,
         points: vec![[1.0, 0.0, 0.0], [1.0, 0.5, 0.0]],
+        attributes: Vec::new(),
     });
     let at = |frame| {
         let image = render(
@@ -428,10 +431,12 @@ fn contact_sheet_lays_pictures_side_by_side_with_labels() {
         Frame {
             time: 0.0,
             points: groom.points.clone(),
+            attributes: Vec::new(),
         },
         Frame {
             time: 1.0,
             points: moved,
+            attributes: Vec::new(),
         },
     ];
     let entries: Vec<SheetEntry> = (0..2)

@@ -44,14 +44,46 @@ impl std::fmt::Debug for Collider {
 }
 
 impl Collider {
-    /// A mesh shape gets its distance grid here, once.
+    /// A mesh shape gets its distance grid here, once (none, and parry's
+    /// queries instead, for a grid over the budget: see [`Collider::checked`]).
     pub fn new(name: impl Into<String>, shape: SharedShape, pose: Pose, friction: f32) -> Collider {
         let grid = shape
             .as_trimesh()
-            .and_then(MeshSdf::new)
+            .and_then(|mesh| MeshSdf::new(mesh).ok().flatten())
             .map(|sdf| (Arc::new(sdf), shape.clone()));
+        Collider::with_grid(name.into(), shape, pose, friction, grid)
+    }
+
+    /// As [`Collider::new`], refusing a mesh whose distance grid would be
+    /// larger than the [`crate::budget`] allows (the message says why).
+    pub fn checked(
+        name: impl Into<String>,
+        shape: SharedShape,
+        pose: Pose,
+        friction: f32,
+    ) -> Result<Collider, String> {
+        let grid = match shape.as_trimesh() {
+            Some(mesh) => MeshSdf::new(mesh)?.map(|sdf| (Arc::new(sdf), shape.clone())),
+            None => None,
+        };
+        Ok(Collider::with_grid(
+            name.into(),
+            shape,
+            pose,
+            friction,
+            grid,
+        ))
+    }
+
+    fn with_grid(
+        name: String,
+        shape: SharedShape,
+        pose: Pose,
+        friction: f32,
+        grid: Option<(Arc<MeshSdf>, SharedShape)>,
+    ) -> Collider {
         Collider {
-            name: name.into(),
+            name,
             shape,
             pose,
             friction,

@@ -3,7 +3,9 @@
 //! every edge walks. The sums are found from the positions at the start of
 //! the step, in parallel and then added in edge order, and only read while
 //! strands are advanced in parallel, so the result does not depend on the
-//! thread count.
+//! thread count. (The physical model's contacts between strands with
+//! Coulomb friction, which the penalty leaves little to do once on, are in
+//! hair_friction.rs.)
 
 use super::instructions::prefetch;
 use super::math::{cross, dot, is_finite3, length, scale, sub, V3};

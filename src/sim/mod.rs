@@ -21,6 +21,10 @@
 //!   (17). The physical model's Newton iterations stop early for a strand
 //!   whose edges are within `SolverParameters::tolerance` (and its constants,
 //!   masses and compliances, are found in the solve's lanes, direct.rs).
+//!   With pairwise hair-hair and `hair_friction` (physical model) the
+//!   contacts between strands are found at the start of the step and
+//!   solved with the collider contacts, Coulomb friction included, each
+//!   strand against the others as kinematic targets (hair_friction.rs).
 //!   Strands run in parallel in groups of four or eight (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.
@@ -60,6 +64,9 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
+mod hair_friction;
+#[cfg(test)]
+mod hair_friction_tests;
 mod hold;
 #[cfg(test)]
 mod hold_tests;
@@ -359,6 +366,12 @@ pub struct SolverParameters {
     pub hair_radius: f32,
     /// `alpha` of the hair-hair penalty (20); `None` switches it off.
     pub hair_hair_strength: Option<f32>,
+    /// Coulomb friction coefficient between hairs (pairwise hair-hair,
+    /// physical model; 0 - 1, 0.05 - 0.5 for real hair): with it, each
+    /// contact between edges of two strands keeps them two radii apart and
+    /// sticks or slides by Coulomb's law inside the solve (hair_friction.rs).
+    /// `None` (or 0): the penalty (20) alone.
+    pub hair_friction: Option<f32>,
     /// Volumetric hair-hair for dense grooms (see [`Volumetric`]); when
     /// set, it replaces the pairwise penalty.
     pub volumetric: Option<Volumetric>,
@@ -380,6 +393,7 @@ impl Default for SolverParameters {
             gravity: [0.0, -9.8, 0.0],
             hair_radius: 4.0e-5,
             hair_hair_strength: None,
+            hair_friction: None,
             volumetric: None,
             linear_damping: 2.0,
             angular_damping: 2.0,
@@ -418,6 +432,11 @@ impl SolverParameters {
         if let Some(alpha) = self.hair_hair_strength {
             if !(alpha.is_finite() && alpha >= 0.0) {
                 return fail("hair_hair_strength", "must be a non-negative number");
+            }
+        }
+        if let Some(mu) = self.hair_friction {
+            if !(mu.is_finite() && (0.0..=1.0).contains(&mu)) {
+                return fail("hair_friction", "must be a coefficient between 0 and 1");
             }
         }
         if let Some(problem) = self.volumetric.as_ref().and_then(Volumetric::problem) {
@@ -498,6 +517,11 @@ pub struct Environment<'a> {
     pub extra_acceleration: Option<&'a [[f32; 3]]>,
     /// The hold toward the groomed shape (hold.rs); `None`: off.
     pub hold: Option<Hold>,
+    /// Hydrogen bonds re-formed this step per vertex (one per vertex of
+    /// the strand set, a rate change in 0..1 added to the joint's hydrogen
+    /// rate): the drying hook, the water that evaporated this step
+    /// (`timeline::drying`). Added to the blower's (21), if any.
+    pub hydrogen_reform: Option<&'a [f32]>,
 }
 
 /// Why the solver cannot start or go on.

@@ -80,7 +80,8 @@ pub struct SagFreeReport {
     /// metres (not compensated; negligible for hair).
     pub max_stretch: f64,
     /// Strands that moved `PROBE_DRIFT` or more standing alone for
-    /// `PROBE_SECONDS` (only filled by `make_sag_free_checked`).
+    /// `PROBE_SECONDS` (only filled by the probe: `make_sag_free_checked`,
+    /// `probe_sag_free`).
     pub unstable: Vec<usize>,
 }
 
@@ -265,10 +266,22 @@ impl StrandSet {
         parameters: &SolverParameters,
     ) -> Result<SagFreeReport, SimError> {
         let mut report = self.make_sag_free(parameters.gravity);
+        self.probe_sag_free(parameters, &mut report)?;
+        Ok(report)
+    }
+
+    /// The stability probe alone, on strands `make_sag_free` solved (its
+    /// `report`): a simulation of `PROBE_SECONDS`, so the bake runs it and
+    /// `validate`, which simulates nothing, does not.
+    pub fn probe_sag_free(
+        &self,
+        parameters: &SolverParameters,
+        report: &mut SagFreeReport,
+    ) -> Result<(), SimError> {
         if report.strands > 0 {
             report.unstable = self.unstable_standing(parameters)?;
         }
-        Ok(report)
+        Ok(())
     }
 
     /// The probe: a copy of the strands longer than half their Greenhill

@@ -334,6 +334,11 @@ impl StrandSet {
         }
     }
 
+    /// Fibre radius per vertex, metres.
+    pub fn radii(&self) -> &[f32] {
+        &self.radii
+    }
+
     pub fn strand_count(&self) -> usize {
         self.offsets.len() - 1
     }

@@ -4,8 +4,11 @@
 //!    (with the hold folded in, hold.rs);
 //! 2. `rest_shape` (bonds): bond-rate changes, rest shape from the bonds (15);
 //! 3. the constraint solve (constraints): `n` iterations of stretch/shear,
-//!    bend/twist and collisions (the physical model's Newton iterations),
-//!    then `end_constraints`: the inextensibility pass, the final collisions;
+//!    bend/twist and collisions (the physical model's Newton iterations,
+//!    with the contacts between strands and their Coulomb friction when
+//!    `hair_friction` is on: hair_friction.rs), then `end_constraints`:
+//!    the inextensibility pass, stuck hair contacts put back, the final
+//!    collisions;
 //! 4. `velocities` (forces): velocities from positions, the finite check;
 //! 5. `update_bonds` (bonds): the bond update (17);
 //! 6. `commit` (forces).
@@ -26,6 +29,7 @@ use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMa
 #[cfg(target_arch = "x86_64")]
 use super::forces::blower_dv_eight;
 use super::forces::{blower_dv, EdgeGrid};
+use super::hair_friction::{self, HairContact, HairContacts};
 use super::hold::{fold, fold_frame};
 use super::instructions::{in_widest, Instructions};
 use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
@@ -48,6 +52,8 @@ pub struct Solver {
     /// The widest instructions the lanes may use.
     instructions: Instructions,
     grid: EdgeGrid,
+    /// Hair-hair contacts with Coulomb friction (physical model).
+    contacts: HairContacts,
     volume: VolumeGrid,
     dispatch: Dispatch,
     /// Time the phases of each step (`StepReport::phases`).
@@ -153,7 +159,11 @@ struct Context<'a> {
     extra_acceleration: Option<&'a [V3]>,
     /// The hold toward the groomed shape (hold.rs), when on.
     hold: Option<Hold>,
+    hydrogen_reform: Option<&'a [f32]>,
     hair_hair: Option<(f32, &'a EdgeGrid)>,
+    /// Contacts between strands with Coulomb friction, solved with the
+    /// collider contacts (physical model, pairwise hair-hair).
+    hair_contacts: Option<&'a HairContacts>,
     /// Volumetric hair-hair's velocity changes (instead of `hair_hair`).
     volume: Option<&'a VolumeGrid>,
     colliders: &'a [PreparedCollider<'a>],
@@ -230,6 +240,12 @@ struct Work {
     predicted: Vec<V3>,
     /// The blower's velocity change at each vertex this step.
     blower: Vec<V3>,
+    /// The index of the strand this copy steps (its hair contacts).
+    strand: usize,
+    /// Per vertex, its share of the hair contacts and whether friction
+    /// stuck it this step (empty until friction runs).
+    touch: Vec<hair_friction::VertexContact>,
+    stuck: Vec<bool>,
     direct: Direct<f64>,
     /// The scalp's frame for the first edge this step.
     root_frame: Quat,
@@ -287,6 +303,7 @@ impl Solver {
             simd: true,
             instructions: Instructions::of_this_cpu(),
             grid: EdgeGrid::default(),
+            contacts: HairContacts::default(),
             volume: VolumeGrid::default(),
             dispatch: Dispatch::default(),
             phase_clock: false,
@@ -344,6 +361,15 @@ impl Solver {
                 )));
             }
         }
+        if let Some(reform) = environment.hydrogen_reform {
+            if reform.len() != strands.vertex_count() || reform.iter().any(|r| !r.is_finite()) {
+                return Err(SimError::Environment(format!(
+                    "hydrogen_reform needs {} finite values, has {}",
+                    strands.vertex_count(),
+                    reform.len()
+                )));
+            }
+        }
         let targets_nan = environment
             .bond_rate_targets
             .iter()
@@ -387,6 +413,7 @@ impl Solver {
         }
         let Solver {
             grid,
+            contacts,
             volume,
             dispatch,
             simd,
@@ -421,19 +448,20 @@ impl Solver {
             );
             &*volume
         });
+        let rest_longest = || {
+            strands
+                .edges
+                .par_iter()
+                .with_min_len(4096)
+                .map(|e| e.rest_length)
+                .filter(|l| l.is_finite())
+                .reduce(|| 0.0, f32::max)
+        };
+        let mut longest = None;
         let hair_hair = match parameters.hair_hair_strength {
             _ if volumetric.is_some() => None,
             Some(alpha) if alpha > 0.0 => {
-                let rest_longest = {
-                    use rayon::prelude::*;
-                    strands
-                        .edges
-                        .par_iter()
-                        .with_min_len(4096)
-                        .map(|e| e.rest_length)
-                        .filter(|l| l.is_finite())
-                        .reduce(|| 0.0, f32::max)
-                };
+                let rest_longest = *longest.get_or_insert_with(rest_longest);
                 grid.build(
                     &strands.positions,
                     &strands.offsets,
@@ -442,6 +470,23 @@ impl Solver {
                     rest_longest,
                 );
                 Some(alpha)
+            }
+            _ => None,
+        };
+        let hair_contacts = match (hair_hair, parameters.hair_friction) {
+            (Some(_), Some(mu)) if mu > 0.0 && strands.material.model == Model::Physical => {
+                let rest_longest = *longest.get_or_insert_with(rest_longest);
+                contacts.build(
+                    &strands.positions,
+                    &strands.velocities,
+                    &strands.offsets,
+                    active,
+                    parameters.hair_radius,
+                    mu,
+                    rest_longest,
+                    parameters.dt,
+                );
+                Some(&*contacts)
             }
             _ => None,
         };
@@ -473,11 +518,14 @@ impl Solver {
             },
             bonds_still: environment.bond_rate_drive.iter().all(|r| *r * dt == 0.0)
                 && environment.bond_rate_targets.iter().all(Option::is_none)
-                && environment.blower.is_none(),
+                && environment.blower.is_none()
+                && environment.hydrogen_reform.is_none(),
             blower: environment.blower,
             extra_acceleration: environment.extra_acceleration,
             hold: environment.hold.filter(|h| h.strength > 0.0),
+            hydrogen_reform: environment.hydrogen_reform,
             hair_hair: hair_hair.map(|alpha| (alpha, &*grid)),
+            hair_contacts,
             volume: volumetric,
             colliders: &prepared,
             root_transform: strands.root_transform,
@@ -687,6 +735,8 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
     let n = s.positions.len();
     let m = n - 1;
     work.resize(n);
+    work.strand = s.index;
+    work.stuck.clear();
     let dt = ctx.dt;
 
     // (ii) External forces, then the predicted positions.
@@ -701,6 +751,9 @@ fn predict_strand(ctx: &Context<'_>, s: &StrandMut<'_>, work: &mut Work) {
             blower_dv_here = work.blower[i];
         } else {
             work.db[i][0] = 0.0;
+        }
+        if let Some(reform) = ctx.hydrogen_reform {
+            work.db[i][0] += reform[s.first_vertex + i];
         }
         let control = s.controls[i];
         if control.targeted {
@@ -1145,8 +1198,8 @@ impl Work {
     fn solve_direct(&mut self, ctx: &Context<'_>, material: RodMaterial, s: &StrandMut<'_>) {
         let n = s.positions.len();
         let m = n - 1;
-        self.contact_normals[..n].fill([0.0; 3]);
-        if !ctx.colliders.is_empty() {
+        self.clear_contacts(n);
+        if self.touches(ctx) {
             self.begin_contacts(ctx, n);
         }
         // Taken out so the solve can borrow the rest of the working copy.
@@ -1157,11 +1210,79 @@ impl Work {
         self.direct = direct;
     }
 
+    /// No contact yet this step. The colliders' friction data too: a
+    /// vertex that only touches hair has a contact normal but no collider,
+    /// and must not read the friction of another strand this working copy
+    /// stepped before (that made a bake depend on the thread count).
+    fn clear_contacts(&mut self, n: usize) {
+        self.contact_normals[..n].fill([0.0; 3]);
+        self.contact_velocities[..n].fill([0.0; 3]);
+        self.contact_friction[..n].fill(0.0);
+    }
+
+    /// The strand's contacts with other strands this step.
+    #[inline]
+    fn hair_contacts<'c>(&self, ctx: &Context<'c>) -> &'c [HairContact] {
+        ctx.hair_contacts.map_or(&[], |h| h.of(self.strand))
+    }
+
+    /// Whether the strand may touch anything this step (a collider or
+    /// another strand): the solve then keeps contacts.
+    #[inline]
+    fn touches(&self, ctx: &Context<'_>) -> bool {
+        !ctx.colliders.is_empty() || !self.hair_contacts(ctx).is_empty()
+    }
+
     /// Before the solve: the prediction kept (friction measures from it),
     /// the predicted positions projected.
     fn begin_contacts(&mut self, ctx: &Context<'_>, n: usize) {
         self.predicted[..n].copy_from_slice(&self.p[..n]);
         self.collide_contacts(ctx, n);
+        self.collide_hairs(ctx, n);
+    }
+
+    /// Pushes the strand's contact points with other strands out to two
+    /// radii (hair_friction.rs). Returns whether a vertex moved.
+    fn collide_hairs(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let Some(hairs) = ctx.hair_contacts else {
+            return false;
+        };
+        self.touch
+            .resize(n, hair_friction::VertexContact::default());
+        hair_friction::project(
+            hairs.of(self.strand),
+            &mut self.touch[..n],
+            &mut self.p[..n],
+            &self.w[..n],
+            &mut self.contact_normals[..n],
+            hairs.distance(),
+            ctx.dt,
+            0.01 * ctx.radius,
+        )
+    }
+
+    /// Coulomb friction at the strand's contacts with other strands, after
+    /// the last solve. Returns whether a vertex moved.
+    fn hair_friction(&mut self, ctx: &Context<'_>, n: usize) -> bool {
+        let Some(hairs) = ctx.hair_contacts else {
+            return false;
+        };
+        self.stuck.clear();
+        self.stuck.resize(n, false);
+        self.touch
+            .resize(n, hair_friction::VertexContact::default());
+        hair_friction::friction(
+            hairs.of(self.strand),
+            &mut self.touch[..n],
+            &mut self.stuck,
+            &mut self.p[..n],
+            &self.x[..n],
+            &self.predicted[..n],
+            &self.w[..n],
+            hairs.mu(),
+            ctx.dt,
+            0.01 * ctx.radius,
+        )
     }
 
     /// After a solve: lane `lane`'s positions projected out of the
@@ -1178,8 +1299,10 @@ impl Work {
     ) -> bool {
         direct.positions_f32(lane, &mut self.p[..n]);
         let mut moved = self.collide_contacts(ctx, n);
+        moved |= self.collide_hairs(ctx, n);
         if last {
             moved |= self.friction(ctx, n);
+            moved |= self.hair_friction(ctx, n);
         }
         direct.set_positions(lane, &self.p[..n]);
         direct.set_contact_normals(lane, &self.contact_normals[..n]);
@@ -1192,6 +1315,9 @@ impl Work {
     /// hair radius).
     fn collide_contacts(&mut self, ctx: &Context<'_>, n: usize) -> bool {
         let mut moved = false;
+        if ctx.colliders.is_empty() {
+            return false;
+        }
         for i in 1..n {
             if self.w[i] <= 0.0 {
                 continue;
@@ -1262,11 +1388,11 @@ fn direct_input<'a>(
         q: &work.q[..m],
         free: &work.w[..n],
         frame_free: &work.frame_keep[..m],
-        // Empty without colliders: the solve then skips reading zeros.
-        contact_normals: if ctx.colliders.is_empty() {
-            &[]
-        } else {
+        // Empty without contacts: the solve then skips reading zeros.
+        contact_normals: if work.touches(ctx) {
             &work.contact_normals[..n]
+        } else {
+            &[]
         },
         l: &work.l[..m],
         radii: s.radii,
@@ -1304,7 +1430,6 @@ fn newton_iterations<T: Real>(
     direct: &mut Direct<T>,
     n: usize,
 ) {
-    let colliding = !ctx.colliders.is_empty();
     let lanes = T::WIDTH;
     let mut progress = [Progress::Iterating; WIDE];
     let mut iteration = 0;
@@ -1325,8 +1450,8 @@ fn newton_iterations<T: Real>(
                     work.solves += 1;
                     let last = iteration >= ctx.iterations
                         || unconverged.is_some_and(|u| u.lane(lane) == 0.0);
-                    let moved =
-                        colliding && work.contacts_after_iteration(direct, lane, ctx, n, last);
+                    let moved = work.touches(ctx)
+                        && work.contacts_after_iteration(direct, lane, ctx, n, last);
                     if last {
                         progress[lane] = if moved {
                             Progress::OneMore
@@ -1354,7 +1479,6 @@ fn step_group_direct<T: Real>(
 ) {
     let n = strands[0].positions.len();
     let m = n - 1;
-    let colliding = !ctx.colliders.is_empty();
     let lanes = T::WIDTH;
     // The phases' times go to the first lane's working copy (summed over
     // all of them at the end of the step).
@@ -1371,8 +1495,8 @@ fn step_group_direct<T: Real>(
     }
     clock.lap(&mut phases.bonds);
     for work in works.iter_mut().take(lanes) {
-        work.contact_normals[..n].fill([0.0; 3]);
-        if colliding {
+        work.clear_contacts(n);
+        if work.touches(ctx) {
             work.begin_contacts(ctx, n);
         }
     }
@@ -1561,6 +1685,18 @@ fn end_constraints(ctx: &Context<'_>, work: &mut Work, n: usize, ftl_done: bool)
             &work.l[..m],
             &mut work.corrections[..n],
         );
+    }
+    if let Some(hairs) = ctx.hair_contacts {
+        // Stuck vertices stay stuck through the last solve.
+        if work.stuck.len() == n && !hairs.of(work.strand).is_empty() {
+            hair_friction::restick(
+                &work.touch[..n],
+                &work.stuck,
+                &mut work.p[..n],
+                &work.x[..n],
+                ctx.dt,
+            );
+        }
     }
     if !ctx.colliders.is_empty() {
         for i in 1..n {

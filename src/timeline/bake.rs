@@ -59,6 +59,8 @@ pub struct BakeMonitor {
     pub steps_done: std::sync::atomic::AtomicU64,
     /// Known once the bake is prepared (0 before).
     pub steps_total: std::sync::atomic::AtomicU64,
+    /// Index of the stage running (or last run) in the timeline's stages.
+    pub stage: AtomicUsize,
     /// 0 while the bake may run. A signal handler stores the signal's
     /// number ([`BakeError::Interrupted`]); [`BakeMonitor::cancel`] stores
     /// [`BakeMonitor::CANCELLED`] ([`BakeError::Cancelled`]). The bake stops
@@ -94,6 +96,8 @@ pub struct BakeOutcome {
     pub rods: Vec<super::surfaces::RodSnapshot>,
     /// The plastic rest shape at the end (as the `rest` export writes it).
     pub rest: Groom,
+    /// Bond rates, wetness and strain sampled every frame (the report's plots).
+    pub plot_samples: Vec<super::plots::PlotSample>,
 }
 
 /// Why a bake failed.
@@ -150,6 +154,16 @@ impl BakeError {
     }
 }
 
+/// The likely cause of strands blowing up, and what to do: the words
+/// `docs/tuning.md` ("Troubleshooting") explains.
+fn blowup_remedy(colliders: bool) -> &'static str {
+    if colliders {
+        "likely cause: a collider inside the hair's roots (move it off the scalp) or a step too large (lower [solver] dt)"
+    } else {
+        "likely cause: a step too large for the stage's forces (lower [solver] dt)"
+    }
+}
+
 /// Everything a bake starts from, prepared (and so checked) before any step.
 pub struct Prepared {
     /// The simulated strands (the guides, when there is render hair).
@@ -160,8 +174,11 @@ pub struct Prepared {
     pub colliders: ColliderSet,
     pub parameters: SolverParameters,
     pub seed: u64,
-    /// What the sag-free start did (`None`: off, or a continued bake).
+    /// What the sag-free start did (`None`: off, or a continued bake);
+    /// its `unstable` strands are found by the bake's probe, not here.
     pub sag_free: Option<sim::SagFreeReport>,
+    /// The fibre radii the strands use, and where they came from.
+    pub fibre_radius: super::fibre::FibreRadius,
 }
 
 /// The material of the timeline in the solver's terms.
@@ -206,6 +223,18 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
             .map(|h| h.get_ref())
             .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
             .map(|h| h.strength),
+        // Friction between hairs: the physical model's pairwise mode, when
+        // the timeline asks for it. Off by default while its contact search
+        // costs about 21 times the frictionless step (docs/performance.md);
+        // `DEFAULT_HAIR_FRICTION` is the value for dry hair (docs/model.md).
+        hair_friction: s
+            .hair_hair
+            .as_ref()
+            .map(|h| h.get_ref())
+            .filter(|h| h.mode == super::schema::HairHairMode::Pairwise)
+            .filter(|_| model == crate::sim::Model::Physical)
+            .and_then(|h| h.friction)
+            .filter(|mu| *mu > 0.0),
         volumetric: s.hair_hair.as_ref().and_then(|h| h.get_ref().volumetric()),
         linear_damping: damping.linear,
         angular_damping: damping.angular,
@@ -303,12 +332,37 @@ pub(crate) fn shape_of(
                 .iter()
                 .map(|v| Vector::new(v[0] * scale, v[1] * scale, v[2] * scale))
                 .collect();
+            check_mesh_coordinates(&vertices).map_err(|message| BakeError::Input {
+                file: file.clone(),
+                message,
+            })?;
             SharedShape::trimesh(vertices, triangles).map_err(|e| BakeError::Input {
                 file,
                 message: format!("not a usable collider mesh: {e}"),
             })?
         }
     })
+}
+
+/// Refuses a collider vertex (after the mesh's scale) outside the scene's
+/// range, [`crate::budget::MAX_COORDINATE`]: its grid would be one cell
+/// holding the whole mesh, and f32 positions there cannot resolve a hair.
+fn check_mesh_coordinates(vertices: &[sim::parry3d::math::Vector]) -> Result<(), String> {
+    for (i, v) in vertices.iter().enumerate() {
+        for (c, axis) in ["x", "y", "z"].into_iter().enumerate() {
+            // Written so that NaN is outside too.
+            let inside = f64::from(v[c]).abs() <= crate::budget::MAX_COORDINATE;
+            if !inside {
+                return Err(format!(
+                    "vertex {i} has {axis} = {:e} m (after `scale`): outside \
+                     -{max:e} to {max:e} m",
+                    v[c],
+                    max = crate::budget::MAX_COORDINATE
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
@@ -321,7 +375,9 @@ pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
 }
 
 /// Imports the groom, builds the strands and colliders. Everything that can
-/// be wrong with the inputs shows here, before the first step.
+/// be wrong with the inputs shows here, before the first step; nothing is
+/// simulated (`validate` runs this), so the sag-free stability probe is
+/// left to the bake.
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
     let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
     let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
@@ -335,8 +391,18 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     let continues = groom.attribute(attribute_names::FRAME_XYZ).is_some();
     let parameters = parameters_of(timeline);
     parameters.check()?;
-    let sag_free = if timeline.file.solver.sag_free && !continues {
-        Some(strands.make_sag_free_checked(&parameters)?)
+    // The wind stage moves the hair without the rod solver: a timeline of
+    // wind stages only has no rest shape to balance. The stability probe
+    // simulates: the bake runs it (`probe_sag_free`), not this preparation
+    // that `validate` shares.
+    let rod_solver = timeline
+        .file
+        .stages
+        .get_ref()
+        .iter()
+        .any(|s| *s.kind.get_ref() != StageKind::Wind);
+    let sag_free = if timeline.file.solver.sag_free && !continues && rod_solver {
+        Some(strands.make_sag_free(parameters.gravity))
     } else {
         None
     };
@@ -344,14 +410,19 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
         let pose = pose_of(pose_at(c.motion.get_ref(), 0.0));
-        colliders.insert(Collider::new(
-            c.name.get_ref().clone(),
-            shape,
-            pose,
-            *c.friction.get_ref(),
-        ));
+        let collider =
+            Collider::checked(c.name.get_ref().clone(), shape, pose, *c.friction.get_ref())
+                .map_err(|message| match c.shape.get_ref() {
+                    ShapeSpec::Mesh { path, .. } => BakeError::Input {
+                        file: timeline.resolve(path),
+                        message,
+                    },
+                    _ => BakeError::Timeline(timeline.error_at(c.shape.span(), message)),
+                })?;
+        colliders.insert(collider);
     }
     check_preview_color(timeline, &groom)?;
+    let fibre_radius = super::fibre::fibre_radius(timeline, &groom, strands.radii());
     Ok(Prepared {
         groom,
         render,
@@ -360,6 +431,7 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         parameters,
         seed,
         sag_free,
+        fibre_radius,
     })
 }
 
@@ -475,18 +547,18 @@ struct AnimatedExport {
     up: UpAxis,
 }
 
-fn export_units(timeline: &Timeline, index: usize) -> (Units, UpAxis) {
+/// What export `index` is written as: its `units`/`up`, else its `target`'s
+/// preset, else the format's default (`exporters::destination`).
+fn export_destination(timeline: &Timeline, index: usize) -> exporters::Destination {
     let e = &timeline.file.exports[index];
-    let units = e
-        .units
-        .as_ref()
-        .and_then(|u| u.get_ref().parse().ok())
-        .unwrap_or_else(|| exporters::default_units(Path::new(e.path.get_ref()), Units::METERS));
-    let up =
-        e.up.as_ref()
-            .and_then(|u| u.get_ref().parse().ok())
-            .unwrap_or(UpAxis::Y);
-    (units, up)
+    exporters::destination(
+        Path::new(e.path.get_ref()),
+        e.target.as_ref().and_then(|t| t.get_ref().parse().ok()),
+        e.units.as_ref().and_then(|u| u.get_ref().parse().ok()),
+        e.up.as_ref().and_then(|u| u.get_ref().parse().ok()),
+        Units::METERS,
+        UpAxis::Y,
+    )
 }
 
 /// The groom with the current pose and the simulation's per-vertex
@@ -610,6 +682,7 @@ fn output_report(
         bytes,
         sha256,
         frames,
+        written_in: None,
     })
 }
 
@@ -640,14 +713,23 @@ fn with_frames_from_positions(
 
 /// What each export must change about the groom's data, one line per kind
 /// (checked before simulating, so `--strict` refuses before any work).
-fn export_warnings(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
+fn export_warnings_of(timeline: &Timeline, options: &BakeOptions, groom: &Groom) -> Vec<String> {
     if options.dry {
         return Vec::new();
     }
     (0..timeline.file.exports.len())
         .flat_map(|index| {
-            let path = output_path(options, timeline.file.exports[index].path.get_ref());
-            exporters::warnings(&path, groom, export_units(timeline, index).0)
+            let e = &timeline.file.exports[index];
+            let path = output_path(options, e.path.get_ref());
+            let destination = export_destination(timeline, index);
+            let mut converted = groom.clone();
+            converted.convert_to(destination.units, destination.up);
+            let mut warnings = exporters::warnings(&path, &converted, destination.units);
+            if e.what == ExportWhat::Animated {
+                let names = super::frame_attributes::changing_in(timeline);
+                warnings.extend(exporters::frame_attributes_warning(&path, &names));
+            }
+            warnings
         })
         .collect()
 }
@@ -734,11 +816,14 @@ struct BakeRun<'a> {
     staged: Vec<PathBuf>,
     staging: Staging,
     animated: Vec<AnimatedExport>,
+    /// The attributes the stages change, written with every animated frame.
+    frame_attributes: Vec<&'static str>,
     /// Steps done over all stages.
     step_index: u64,
     snapshots: Vec<(String, Groom)>,
     rods: Vec<super::surfaces::RodSnapshot>,
     report: BakeReport,
+    plots: super::plots::Plotter,
 }
 
 /// What one stage runs with: its solver and colliders, rods and wind.
@@ -750,6 +835,8 @@ struct StageRun<'p> {
     rods: Option<PermRods>,
     wind: Option<WindPlan>,
     unrolled: bool,
+    /// Evaporation in a `dry` stage without `drying_time`.
+    drying: Option<super::drying::Drying>,
     /// Positions before the step, for the watchdog to put a strand back.
     before: Vec<[f32; 3]>,
     /// The strands the watchdog saw strained beyond `sim::WARN_STRAIN`.
@@ -773,9 +860,25 @@ impl<'a> BakeRun<'a> {
             colliders,
             parameters,
             seed,
-            sag_free,
+            mut sag_free,
+            fibre_radius,
         } = prepare(timeline, options.seed)?;
-        let export_warnings = export_warnings(timeline, options, &groom);
+        if let Some(sag_free) = &mut sag_free {
+            strands.probe_sag_free(&parameters, sag_free)?;
+        }
+        // What the reader left out of the source, then what the exports
+        // must change.
+        let source = timeline.file.groom.source.as_ref();
+        let mut export_warnings: Vec<String> = groom
+            .provenance
+            .losses
+            .iter()
+            .map(|loss| match source {
+                Some(source) => format!("{}: {loss}", timeline.resolve(source.get_ref()).display()),
+                None => loss.clone(),
+            })
+            .collect();
+        export_warnings.extend(export_warnings_of(timeline, options, &groom));
         if let (true, Some(first)) = (options.strict, export_warnings.first()) {
             return Err(BakeError::Input {
                 file: timeline.path.clone(),
@@ -807,6 +910,8 @@ impl<'a> BakeRun<'a> {
             ..BakeReport::start(&timeline.path)
         };
         report.record_sources(timeline);
+        report.warnings.extend(fibre_radius.warning());
+        report.fibre_radius = Some(fibre_radius);
         if let Some(warning) = sag_free.as_ref().and_then(sim::SagFreeReport::warning) {
             report.warnings.push(warning);
         }
@@ -837,6 +942,8 @@ impl<'a> BakeRun<'a> {
             create_parent(path)?;
             staged.push(staging.stage(path));
         }
+        let frame_attributes = super::frame_attributes::changing(&plans);
+        let plots = super::plots::Plotter::new(&strands);
         let mut run = BakeRun {
             timeline,
             options,
@@ -856,10 +963,12 @@ impl<'a> BakeRun<'a> {
             staged,
             staging,
             animated: Vec::new(),
+            frame_attributes,
             step_index: 0,
             snapshots: Vec::new(),
             rods: Vec::new(),
             report,
+            plots,
         };
         if !removed.is_empty() {
             run.report.warnings.push(format!(
@@ -881,7 +990,8 @@ impl<'a> BakeRun<'a> {
             }
             let fps = e.fps.as_ref().map_or(24.0, |f| *f.get_ref());
             let frame_count = (self.total_time * fps + 1e-6).floor() as usize + 1;
-            let (units, up) = export_units(self.timeline, index);
+            let destination = export_destination(self.timeline, index);
+            let (units, up) = (destination.units, destination.up);
             let guides = self.groom_now(false);
             let delivery = super::render::Delivery::new(
                 self.render.as_ref(),
@@ -890,10 +1000,11 @@ impl<'a> BakeRun<'a> {
             );
             let mut base = delivery.groom(self.render.as_ref(), &guides);
             base.convert_to(units, up);
-            let writer = exporters::animated(
+            let writer = exporters::animated_as(
                 &self.staged[index],
                 &base,
                 exporters::AnimationOptions { fps, frame_count },
+                destination.attributes,
             )?;
             self.animated.push(AnimatedExport {
                 index,
@@ -912,6 +1023,14 @@ impl<'a> BakeRun<'a> {
     /// Writes the animated frames due by the current step: frame k belongs
     /// to the step nearest k / fps.
     fn write_due_frames(&mut self) -> Result<(), BakeError> {
+        let due = |a: &AnimatedExport| {
+            a.frames_written < a.frame_count
+                && ((a.frames_written as f64 / a.fps) / self.dt).round() as u64 <= self.step_index
+        };
+        // The guides' pose with the attributes that change, once for all
+        // exports with a frame due.
+        let guides = (!self.frame_attributes.is_empty() && self.animated.iter().any(due))
+            .then(|| self.groom_now(false));
         for a in self.animated.iter_mut() {
             while a.frames_written < a.frame_count {
                 let k = a.frames_written;
@@ -923,9 +1042,18 @@ impl<'a> BakeRun<'a> {
                     .delivery
                     .points(self.render.as_ref(), self.strands.positions());
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
+                let attributes = guides.as_ref().map_or_else(Vec::new, |g| {
+                    super::frame_attributes::delivered(
+                        &a.delivery,
+                        self.render.as_ref(),
+                        g,
+                        &self.frame_attributes,
+                    )
+                });
                 let frame = Frame {
                     time: k as f64 / a.fps,
                     points,
+                    attributes,
                 };
                 a.writer.write_frame(&frame)?;
                 a.frames_written += 1;
@@ -1037,6 +1165,9 @@ impl<'a> BakeRun<'a> {
             steps,
             ..StageReport::default()
         };
+        if let Some(monitor) = &self.options.monitor {
+            monitor.stage.store(stage_index, Ordering::Relaxed);
+        }
         let mut stage = self.start_stage(spec, plan, global_time)?;
         for local_step in 0..steps {
             self.options.interrupted()?;
@@ -1054,6 +1185,7 @@ impl<'a> BakeRun<'a> {
                 });
             }
             self.step_index += 1;
+            self.plots.after_step(t_end, &self.strands);
             if let Some(monitor) = &self.options.monitor {
                 monitor.steps_done.store(self.step_index, Ordering::Relaxed);
             }
@@ -1069,6 +1201,9 @@ impl<'a> BakeRun<'a> {
             self.strands.keep_groomed_of(&old);
         }
         self.snapshot(format!("after {}", stage_report.name));
+        stage_report.set_kept = self
+            .plots
+            .stage_end(global_time + steps as f64 * dt, &self.strands);
         let non_finite = stage_report.contained_strands.len() - stage_report.watchdog.len();
         if non_finite > 0 {
             stage_report.warnings.push(format!(
@@ -1081,11 +1216,12 @@ impl<'a> BakeRun<'a> {
         }
         if let Some(first) = stage_report.watchdog.first() {
             stage_report.warnings.push(format!(
-                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {})",
+                "{} strand(s) blew up and were put back and frozen (first: strand {} at step {}: {}); {}",
                 stage_report.watchdog.len(),
                 first.strand,
                 first.step,
-                first.reason
+                first.reason,
+                blowup_remedy(!stage.colliders.is_empty())
             ));
         }
         stage_report.wall_seconds = stage_started.elapsed().as_secs_f64();
@@ -1144,6 +1280,20 @@ impl<'a> BakeRun<'a> {
             }
             _ => None,
         };
+        let drying = plan.drying.map(|air| {
+            let material = &timeline.file.material;
+            let radius = material
+                .radius
+                .as_ref()
+                .map_or(self.parameters.hair_radius, |r| *r.get_ref());
+            super::drying::Drying::new(
+                &air,
+                plan.blower,
+                f64::from(radius),
+                f64::from(*material.density.get_ref()),
+                self.dt,
+            )
+        });
         Ok(StageRun {
             plan,
             solver,
@@ -1152,6 +1302,7 @@ impl<'a> BakeRun<'a> {
             rods,
             wind,
             unrolled: false,
+            drying,
             before: Vec::new(),
             strain: sim::StrainWatch::default(),
         })
@@ -1202,9 +1353,15 @@ impl<'a> BakeRun<'a> {
                 stage.unrolled = true;
             }
         }
-        let (environment, wetness) = plan.environment_at(t_local);
+        let (mut environment, wetness) = plan.environment_at(t_local);
         if let Some((target, rate)) = wetness {
             drive_wetness(strands, target, rate, dt as f32);
+        }
+        if let Some(drying) = stage.drying.as_mut() {
+            let mut water = strands.wetness().to_vec();
+            drying.step(strands.positions(), &mut water);
+            strands.wetness_mut().copy_from_slice(&water);
+            environment.hydrogen_reform = Some(&drying.reform);
         }
         if let Some(wind) = stage.wind.as_mut() {
             if wind.advance_to(t_local + dt) {
@@ -1228,8 +1385,9 @@ impl<'a> BakeRun<'a> {
         for (index, e) in self.exports.iter().enumerate() {
             self.options.interrupted()?;
             let (path, staged) = (&self.finals[index], &self.staged[index]);
+            let destination = export_destination(self.timeline, index);
             if e.what != ExportWhat::Animated {
-                let (units, up) = export_units(self.timeline, index);
+                let (units, up) = (destination.units, destination.up);
                 let mut out = match e.what {
                     ExportWhat::Final => self.groom_now(false),
                     ExportWhat::Rest => {
@@ -1244,12 +1402,12 @@ impl<'a> BakeRun<'a> {
                     super::render::curve_form(e),
                 );
                 out.convert_to(units, up);
-                exporters::write(staged, &out)?;
+                exporters::write_as(staged, &out, destination.attributes)?;
             }
             let what = format!("{:?}", e.what).to_lowercase();
-            self.report
-                .outputs
-                .push(output_report(staged, path, what, frames_of[index])?);
+            let mut output = output_report(staged, path, what, frames_of[index])?;
+            output.written_in = exporters::written_in(path, destination.units, destination.up);
+            self.report.outputs.push(output);
         }
         if let (Some(_), false) = (&self.timeline.file.preview, self.options.dry) {
             let index = self.exports.len();
@@ -1276,6 +1434,7 @@ impl<'a> BakeRun<'a> {
             snapshots: self.snapshots,
             rods: self.rods,
             rest,
+            plot_samples: self.plots.samples,
         })
     }
 }

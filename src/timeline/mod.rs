@@ -2,15 +2,24 @@
 //! (this module), the stages that drive the simulation ([`stages`]) and the
 //! bake that runs them and writes the exports ([`bake`]).
 
+mod applies;
 pub mod bake;
+pub mod drying;
+pub mod fibre;
+pub mod frame_attributes;
 pub mod hold;
 pub mod motion;
 pub mod outputs;
+pub mod plots;
+mod ranges;
 pub mod render;
 pub mod report;
 pub mod schema;
 pub mod stages;
 pub mod surfaces;
+
+/// Perm rod radii, metres: the range `docs/tuning.md` documents.
+pub const ROD_RADIUS: std::ops::RangeInclusive<f32> = 0.005..=0.05;
 
 use schema::{ExportWhat, ShapeSpec, StageKind, TimelineFile};
 use serde_spanned::Spanned;
@@ -50,6 +59,21 @@ fn place(line: usize, column: usize) -> String {
     }
 }
 
+/// An input named by a timeline must be a regular file: a device, FIFO or
+/// directory is refused with its kind (reading one would never end).
+pub(crate) fn check_input_file(path: &Path, what: &str) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Err(_) => Err(format!("{what} '{}' not found", path.display())),
+        Ok(metadata) => match importers::special_kind(&metadata) {
+            Some(kind) => Err(format!(
+                "{what} '{}' is {kind}, not a regular file",
+                path.display()
+            )),
+            None => Ok(()),
+        },
+    }
+}
+
 /// 1-based line and column of a byte offset.
 fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(text.len());
@@ -76,12 +100,15 @@ impl Timeline {
     /// Reads, parses and checks a timeline. Every check that needs no
     /// simulation happens here, so a bad timeline fails before any work.
     pub fn load(path: &Path) -> Result<Timeline, TimelineError> {
-        let text = std::fs::read_to_string(path).map_err(|e| TimelineError {
+        let fail = |message: String| TimelineError {
             file: path.to_path_buf(),
             line: 0,
             column: 0,
-            message: format!("cannot read the timeline: {e}"),
-        })?;
+            message: format!("cannot read the timeline: {message}"),
+        };
+        let bytes = importers::read_limited(path, crate::budget::MAX_TIMELINE_BYTES)
+            .map_err(|e| fail(e.to_string()))?;
+        let text = String::from_utf8(bytes).map_err(|e| fail(format!("not UTF-8 text ({e})")))?;
         Timeline::parse(path, text)
     }
 
@@ -178,11 +205,8 @@ impl Timeline {
             }
             (Some(source), None) => {
                 let path = self.resolve(source.get_ref());
-                if !path.is_file() {
-                    return fail(
-                        source.span(),
-                        format!("groom file '{}' not found", path.display()),
-                    );
+                if let Err(message) = check_input_file(&path, "groom file") {
+                    return fail(source.span(), message);
                 }
             }
             (None, Some(g)) => {
@@ -203,7 +227,10 @@ impl Timeline {
         }
         check_keys(self, &f.groom.motion)?;
         if !f.groom.translate.iter().all(|c| c.is_finite()) {
-            return fail(0..0, "[groom] translate must be finite".into());
+            return fail(
+                ranges::span_of(self, "groom.translate"),
+                "[groom] translate must be finite".into(),
+            );
         }
         render::check_groom(self)?;
 
@@ -212,6 +239,7 @@ impl Timeline {
         if !(0.0..=1.0).contains(m.stiffness.get_ref()) {
             return fail(m.stiffness.span(), "stiffness must be in [0, 1]".into());
         }
+        applies::check_material(self)?;
         let positive = |v: f32| v.is_finite() && v > 0.0;
         if !positive(*m.youngs_modulus.get_ref()) {
             return fail(
@@ -293,7 +321,10 @@ impl Timeline {
             }
         }
         if !s.gravity.iter().all(|g| g.is_finite()) {
-            return fail(0..0, "gravity must be finite".into());
+            return fail(
+                ranges::span_of(self, "solver.gravity"),
+                "gravity must be finite".into(),
+            );
         }
         if !(s.hair_radius.get_ref().is_finite() && *s.hair_radius.get_ref() > 0.0) {
             return fail(
@@ -304,6 +335,9 @@ impl Timeline {
         if let Some(hh) = &s.hair_hair {
             if let Some(problem) = hh.get_ref().volumetric().and_then(|v| v.problem()) {
                 return fail(hh.span(), format!("hair_hair {problem}"));
+            }
+            if let Some(problem) = hh.get_ref().friction_problem(*f.material.model.get_ref()) {
+                return fail(hh.span(), problem);
             }
             if !(0.0..=10.0).contains(&hh.get_ref().strength) {
                 return fail(
@@ -421,6 +455,11 @@ impl Timeline {
                 }
                 (None, _) => {}
             }
+            if let Some(target) = &e.target {
+                if let Err(message) = target.get_ref().parse::<exporters::Target>() {
+                    return fail(target.span(), message);
+                }
+            }
             if let Some(units) = &e.units {
                 if let Err(message) = units.get_ref().parse::<groom::Units>() {
                     return fail(units.span(), message);
@@ -435,6 +474,9 @@ impl Timeline {
         }
         if let Some(preview) = &f.preview {
             let path = Path::new(preview.sheet.get_ref());
+            if let Err(message) = check_output_name(path) {
+                return fail(preview.sheet.span(), message);
+            }
             if importers::extension_of(path) != "png" {
                 return fail(
                     preview.sheet.span(),
@@ -455,6 +497,9 @@ impl Timeline {
                 }
             }
         }
+        // Every number within its documented range (after the checks
+        // above, whose messages are more specific).
+        ranges::check(self)?;
         Ok(dt)
     }
 
@@ -477,11 +522,8 @@ impl Timeline {
             } => positive(&[*half_height, *radius]),
             ShapeSpec::Mesh { path, scale } => {
                 let resolved = self.resolve(path);
-                if !resolved.is_file() {
-                    return Err(self.error_at(
-                        shape.span(),
-                        format!("mesh file '{}' not found", resolved.display()),
-                    ));
+                if let Err(message) = check_input_file(&resolved, "mesh file") {
+                    return Err(self.error_at(shape.span(), message));
                 }
                 let extension = importers::extension_of(&resolved);
                 if !["obj", "glb", "gltf"].contains(&extension.as_str()) {
@@ -550,6 +592,7 @@ impl Timeline {
         if let Some(w) = &stage.wetness {
             check_drive(self, w)?;
         }
+        applies::check_stage_keys(self, stage)?;
         let only = |present: bool, span: Range<usize>, what: &str, kinds: &[StageKind]| {
             if present && !kinds.contains(&kind) {
                 let names: Vec<_> = kinds.iter().map(|k| k.name()).collect();
@@ -626,6 +669,19 @@ impl Timeline {
             {
                 return fail(r.span(), "rod needs a positive radius, root_gap >= 0, disulfide_cut in [0, 1], increasing phases in (0, 1] and a non-zero axis".into());
             }
+            // The documented range (docs/tuning.md): real perm rods. A
+            // thinner rod bends edges further than a step can follow.
+            if !ROD_RADIUS.contains(&v.radius) {
+                return fail(
+                    r.span(),
+                    format!(
+                        "rod radius {} m: outside the documented {} - {} m (perm rods are 5 mm to 5 cm)",
+                        v.radius,
+                        ROD_RADIUS.start(),
+                        ROD_RADIUS.end()
+                    ),
+                );
+            }
         }
         match (&stage.wind, kind) {
             (Some(w), StageKind::Wind) => {
@@ -686,6 +742,7 @@ fn stage_steps_at(timeline: &Timeline, dt: f64) -> Vec<u64> {
 /// Whether the exporters know the extension of `path`; the message names
 /// what is wrong (no extension, or an unknown one) and the known ones.
 pub fn check_output_extension(path: &Path) -> Result<(), String> {
+    check_output_name(path)?;
     let extension = importers::extension_of(path);
     if exporters::EXTENSIONS.contains(&extension.as_str()) {
         return Ok(());
@@ -699,6 +756,32 @@ pub fn check_output_extension(path: &Path) -> Result<(), String> {
             format!(".{}", extension.escape_debug())
         )
     })
+}
+
+/// Refuses an output path that cannot name a file, whatever is on disk: a
+/// NUL byte (no system call takes it), a trailing separator or a last
+/// component of `.` or `..` (a folder). `Path` itself drops a trailing
+/// `/`, so the bytes are looked at.
+pub fn check_output_name(path: &Path) -> Result<(), String> {
+    use std::os::unix::ffi::OsStrExt;
+    let bytes = path.as_os_str().as_bytes();
+    if bytes.contains(&0) {
+        return Err("the path contains a NUL byte".into());
+    }
+    if bytes.is_empty() {
+        return Err("the path is empty".into());
+    }
+    if bytes.ends_with(b"/") {
+        return Err("the path ends with '/': it names a folder, not a file".into());
+    }
+    if matches!(
+        path.components().next_back(),
+        Some(std::path::Component::CurDir | std::path::Component::ParentDir) | None
+    ) || bytes.ends_with(b"/.")
+    {
+        return Err("the path names a folder ('.' or '..'), not a file".into());
+    }
+    Ok(())
 }
 
 fn check_keys(
@@ -832,6 +915,60 @@ duration = 0.5
         let parameters = bake::parameters_of(&pairwise);
         assert_eq!(parameters.hair_hair_strength, Some(5.0));
         assert_eq!(parameters.volumetric, None);
+    }
+
+    /// Friction between hairs (issue 33): off unless asked for (its search
+    /// is not yet within the step's budget), in the physical model's
+    /// pairwise mode; 0 switches it off, out of range or where it does not
+    /// apply is an error at the key's line.
+    #[test]
+    fn hair_friction_defaults_reaches_the_solver_and_bad_values_are_named() {
+        let with = |table: &str| format!("{GOOD}\n[solver]\nhair_hair = {{ {table} }}\n");
+        let parameters = |table: &str| bake::parameters_of(&load_text(&with(table)).unwrap());
+        assert_eq!(parameters("strength = 5.0").hair_friction, None);
+        assert_eq!(
+            parameters(&format!(
+                "strength = 5.0, friction = {}",
+                schema::DEFAULT_HAIR_FRICTION
+            ))
+            .hair_friction,
+            Some(schema::DEFAULT_HAIR_FRICTION)
+        );
+        assert_eq!(
+            parameters("strength = 5.0, friction = 0.1").hair_friction,
+            Some(0.1)
+        );
+        assert_eq!(
+            parameters("strength = 5.0, friction = 0").hair_friction,
+            None
+        );
+        let volumetric = parameters("mode = \"volumetric\", grid_friction = 500.0");
+        assert_eq!(volumetric.hair_friction, None);
+        assert_eq!(volumetric.volumetric.unwrap().friction, 500.0);
+        for (table, says) in [
+            ("strength = 5.0, friction = 0.7", "from 0.05 to 0.5"),
+            ("strength = 5.0, friction = 0.01", "from 0.05 to 0.5"),
+            ("mode = \"volumetric\", friction = 0.3", "pairwise mode"),
+            ("strength = 5.0, grid_friction = 10.0", "volumetric mode"),
+            (
+                "mode = \"volumetric\", grid_friction = -1.0",
+                "grid_friction must be",
+            ),
+        ] {
+            let e = load_text(&with(table)).unwrap_err();
+            assert!(e.line == 10 && e.message.contains(says), "{table}: {e}");
+        }
+        let paper = format!(
+            "{GOOD}\n[material]\nmodel = \"paper\"\n[solver]\nhair_hair = {{ strength = 5.0, friction = 0.3 }}\n"
+        );
+        let e = load_text(&paper).unwrap_err();
+        assert!(e.message.contains("physical model only"), "{e}");
+        // The paper model's pairwise hair-hair stays frictionless.
+        let paper = paper.replace(", friction = 0.3", "");
+        assert_eq!(
+            bake::parameters_of(&load_text(&paper).unwrap()).hair_friction,
+            None
+        );
     }
 
     #[test]

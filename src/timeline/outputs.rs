@@ -63,10 +63,12 @@ pub fn canonical(path: &Path) -> std::io::Result<PathBuf> {
     }
 }
 
-/// Why `path` cannot be written, found without writing it: it is a folder,
-/// a part of its folder is a file, or the folder that exists is not
+/// Why `path` cannot be written, found without writing it: it cannot name
+/// a file ([`super::check_output_name`]), it is a folder, a part of its
+/// folder is a file, or the folder that exists is not
 /// writable (see `may_write_in`).
 pub fn check_writable(path: &Path) -> Result<(), String> {
+    super::check_output_name(path)?;
     if path.is_dir() {
         return Err("is a folder, not a file".into());
     }

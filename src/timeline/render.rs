@@ -83,11 +83,8 @@ pub fn check_groom(timeline: &Timeline) -> Result<(), TimelineError> {
         }
         if let Some(scalp) = &r.scalp {
             let path = timeline.resolve(scalp);
-            if !path.is_file() {
-                return Err(timeline.error_at(
-                    render.span(),
-                    format!("scalp mesh '{}' not found", path.display()),
-                ));
+            if let Err(message) = super::check_input_file(&path, "scalp mesh") {
+                return Err(timeline.error_at(render.span(), message));
             }
         }
     }

@@ -27,6 +27,12 @@ pub struct StageReport {
     pub contained_strands: Vec<usize>,
     /// Strands the physical sanity watchdog contained, with why.
     pub watchdog: Vec<WatchdogReport>,
+    /// After this stage, the share of the largest shape change so far
+    /// (the pose against the groom at the start) that the rest shape
+    /// keeps: 0 the hair would spring back to its groomed shape if released
+    /// now, 1 it keeps the whole change; `null` while the pose has not
+    /// changed (see `timeline::plots`).
+    pub set_kept: Option<f64>,
     pub warnings: Vec<String>,
 }
 
@@ -38,6 +44,10 @@ pub struct OutputReport {
     pub sha256: String,
     /// Frames written (animated exports).
     pub frames: Option<usize>,
+    /// The units and up axis of an Alembic or `.obj` export, which the file
+    /// cannot record for other programs (`"m, Y up"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub written_in: Option<String>,
 }
 
 /// A strand the watchdog contained: at which step of the stage, and why.
@@ -52,7 +62,7 @@ pub struct WatchdogReport {
 #[derive(Debug, Clone, Serialize)]
 pub struct SourceReport {
     pub path: String,
-    /// `groom` or `collider mesh`.
+    /// `groom`, `collider mesh` or `scalp mesh`.
     pub role: String,
     pub sha256: String,
 }
@@ -84,6 +94,8 @@ pub struct BakeReport {
     pub threads: usize,
     pub strands: usize,
     pub vertices: usize,
+    /// The fibre radii used (metres) and where they came from.
+    pub fibre_radius: Option<super::fibre::FibreRadius>,
     /// Strands the solver does not move (fewer than two points, or two
     /// identical consecutive points).
     pub unsimulated_strands: Vec<usize>,
@@ -139,16 +151,7 @@ impl BakeReport {
 
     /// Records the input files of the timeline and their hashes.
     pub fn record_sources(&mut self, timeline: &super::Timeline) {
-        let mut sources = Vec::new();
-        if let Some(source) = &timeline.file.groom.source {
-            sources.push(("groom", timeline.resolve(source.get_ref())));
-        }
-        for c in &timeline.file.colliders {
-            if let super::schema::ShapeSpec::Mesh { path, .. } = c.shape.get_ref() {
-                sources.push(("collider mesh", timeline.resolve(path)));
-            }
-        }
-        self.sources = sources
+        self.sources = input_files(timeline)
             .into_iter()
             .filter_map(|(role, path)| {
                 let (_, sha256) = size_and_sha256(&path).ok()?;
@@ -159,6 +162,15 @@ impl BakeReport {
                 })
             })
             .collect();
+    }
+
+    /// Ends the report of a bake of `timeline` that succeeded as `groombake
+    /// bake --report` writes it: the input files, the timeline's warnings
+    /// first, status `ok`, the time it finished.
+    pub fn finish_ok(&mut self, timeline: &super::Timeline) {
+        self.record_sources(timeline);
+        self.warnings.splice(0..0, timeline.warnings());
+        self.finish("ok", 0, None);
     }
 
     /// Ends the report with the outcome.
@@ -177,6 +189,30 @@ impl BakeReport {
         std::io::Write::write_all(&mut file, b"\n")?;
         file.commit()
     }
+}
+
+/// Every file a timeline reads besides itself, with its role: the groom,
+/// collider meshes and the render scalp. A bake's outputs depend on these
+/// bytes (a batch's `--resume` compares their hashes).
+pub fn input_files(timeline: &super::Timeline) -> Vec<(&'static str, std::path::PathBuf)> {
+    let mut files = Vec::new();
+    let groom = &timeline.file.groom;
+    if let Some(source) = &groom.source {
+        files.push(("groom", timeline.resolve(source.get_ref())));
+    }
+    for c in &timeline.file.colliders {
+        if let super::schema::ShapeSpec::Mesh { path, .. } = c.shape.get_ref() {
+            files.push(("collider mesh", timeline.resolve(path)));
+        }
+    }
+    if let Some(scalp) = groom
+        .render
+        .as_ref()
+        .and_then(|r| r.get_ref().scalp.as_ref())
+    {
+        files.push(("scalp mesh", timeline.resolve(scalp)));
+    }
+    files
 }
 
 /// Size and SHA-256 (lower-case hex) of a file.

@@ -213,7 +213,17 @@ pub struct HairHairSpec {
     pub smoothing: Option<f32>,
     /// Push down the hair's volume fraction gradient, m^2/s^2 (volumetric).
     pub repulsion: Option<f32>,
+    /// Coulomb friction coefficient between hairs (pairwise mode, physical
+    /// model): 0 (off) or 0.05 - 0.5; `None`: [`DEFAULT_HAIR_FRICTION`].
+    pub friction: Option<f32>,
+    /// Friction through the grid, 1/s per unit volume fraction
+    /// (volumetric mode): see `Volumetric::friction`.
+    pub grid_friction: Option<f32>,
 }
+
+/// Hair-on-hair Coulomb coefficient of dry hair (docs/model.md, "Friction
+/// between hairs", for the sources).
+pub const DEFAULT_HAIR_FRICTION: f32 = 0.3;
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -232,7 +242,30 @@ impl HairHairSpec {
             cell_size: self.cell_size.unwrap_or(default.cell_size),
             smoothing: self.smoothing.unwrap_or(default.smoothing),
             repulsion: self.repulsion.unwrap_or(default.repulsion),
+            friction: self.grid_friction.unwrap_or(default.friction),
         })
+    }
+
+    /// What is wrong with the friction keys for material model `model`.
+    pub fn friction_problem(&self, model: crate::sim::Model) -> Option<String> {
+        let pairwise = self.mode == HairHairMode::Pairwise;
+        if let Some(mu) = self.friction {
+            if !pairwise {
+                return Some("hair_hair friction applies to the pairwise mode (the volumetric mode has grid_friction)".into());
+            }
+            if model != crate::sim::Model::Physical {
+                return Some("hair_hair friction applies to the physical model only".into());
+            }
+            if !(mu == 0.0 || (0.05..=0.5).contains(&mu)) {
+                return Some(format!(
+                    "hair_hair friction must be 0 (off) or a coefficient from 0.05 to 0.5, not {mu}"
+                ));
+            }
+        }
+        if self.grid_friction.is_some() && pairwise {
+            return Some("hair_hair grid_friction applies to the volumetric mode (the pairwise mode has friction)".into());
+        }
+        None
     }
 }
 
@@ -417,6 +450,15 @@ pub struct BlowerSpec {
     /// Degrees; no wind outside the cone (default: none).
     #[serde(default)]
     pub cone_half_angle: Option<f32>,
+    /// Speed of the blower's air on its axis, m/s: with the falloff of
+    /// (19) it sets how fast the hair dries where the air reaches
+    /// (`timeline::drying`). Default 10 m/s, a hand-held dryer's.
+    #[serde(default)]
+    pub air_speed: Option<f64>,
+    /// Temperature of the blower's air on its axis, degrees Celsius.
+    /// Default 60 °C, a hand-held dryer's hot setting.
+    #[serde(default)]
+    pub air_temperature: Option<f64>,
 }
 
 fn default_falloff_length() -> f32 {
@@ -508,6 +550,15 @@ pub struct StageSpec {
     pub drying_time: Option<Spanned<f64>>,
     /// `dry`: a blower.
     pub blower: Option<Spanned<BlowerSpec>>,
+    /// `dry` (without `drying_time`): the room air's temperature, degrees
+    /// Celsius (default 20).
+    pub air_temperature: Option<Spanned<f64>>,
+    /// `dry` (without `drying_time`): the room air's speed past the hair,
+    /// m/s (default 0: still air).
+    pub air_speed: Option<Spanned<f64>>,
+    /// `dry` (without `drying_time`): the room air's relative humidity,
+    /// 0..1 (default 0.5).
+    pub humidity: Option<Spanned<f64>>,
     /// `perm`: the rods.
     pub rod: Option<Spanned<RodSpec>>,
     /// `wind`: the stochastic wind.
@@ -545,7 +596,12 @@ pub struct ExportSpec {
     pub what: ExportWhat,
     /// Frames per second of an animated export.
     pub fps: Option<Spanned<f64>>,
-    /// Units of the file (default: the format's, `exporters::default_units`).
+    /// The program the file is for (`unreal`, `maya`, `houdini`, `blender`,
+    /// `usd`): a preset of units, up axis and attribute names
+    /// (`exporters::Target`); `units` and `up` override it.
+    pub target: Option<Spanned<String>>,
+    /// Units of the file (default: the target's, else the format's,
+    /// `exporters::default_units`).
     pub units: Option<Spanned<String>>,
     /// Up axis of the file (default y).
     pub up: Option<Spanned<String>>,

@@ -54,6 +54,8 @@ pub struct StagePlan {
     pub release_targets: bool,
     /// The hold toward the groomed shape in this stage (`super::hold`).
     pub hold: Option<Hold>,
+    /// Evaporation into this air (a `dry` stage without `drying_time`).
+    pub drying: Option<super::drying::DryingAir>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -89,13 +91,10 @@ impl StagePlan {
                 wetness.push(drive(0.0, 1.0, time));
             }
             StageKind::Dry => {
-                let time = spec.drying_time.as_ref().map(|d| *d.get_ref());
-                let air = match (time, &spec.blower) {
-                    (Some(t), _) => Some(t),
-                    (None, Some(_)) => None,
-                    (None, None) => Some(0.8 * duration),
-                };
-                if let Some(time) = air {
+                // `drying_time` dries the hair over that time, everywhere
+                // alike; without it the water evaporates into the air
+                // (`drying`), and the bonds re-form as it leaves.
+                if let Some(time) = spec.drying_time.as_ref().map(|d| *d.get_ref()) {
                     bonds[0].push(drive(0.0, 1.0, time));
                     wetness.push(drive(0.0, 0.0, time));
                 }
@@ -177,6 +176,7 @@ impl StagePlan {
             wind: spec.wind.as_ref().map(|w| w.get_ref().clone()),
             release_targets,
             hold: None,
+            drying: super::drying::DryingAir::of_stage(spec),
         }
     }
 

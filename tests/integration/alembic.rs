@@ -27,8 +27,13 @@ fn blender_archive_reads_as_metres() {
     assert_eq!(summary["units"], "m", "{summary}");
     assert_eq!(summary["units_source"], "application Blender", "{summary}");
     assert_eq!(summary["bounds"]["max"], json!([1.1f32, 0.4f32, 0.0]));
-    // Converted with the defaults, it becomes centimetres (Alembic's default).
-    dir.run_ok(&["convert", source, "cm.abc"]);
+    // Converted with the defaults, it stays in metres (what Blender and
+    // Houdini read Alembic as).
+    dir.run_ok(&["convert", source, "default.abc"]);
+    let default = importers::read(&dir.path("default.abc")).unwrap();
+    assert_eq!(default.units, groom::Units::METERS);
+    // For Maya: centimetres.
+    dir.run_ok(&["convert", source, "cm.abc", "--target", "maya"]);
     let cm = importers::read(&dir.path("cm.abc")).unwrap();
     assert_eq!(cm.units, groom::Units::CENTIMETERS);
     let (_, max) = cm.bounds().unwrap();
@@ -36,8 +41,16 @@ fn blender_archive_reads_as_metres() {
         (max[0] - 110.0).abs() < 1e-4 && (max[1] - 40.0).abs() < 1e-4,
         "{max:?}"
     );
-    // Stated units win over the application's.
-    dir.run_ok(&["convert", source, "stated.abc", "--source-units", "cm"]);
+    // Stated units win over the application's (written in cm, as read).
+    dir.run_ok(&[
+        "convert",
+        source,
+        "stated.abc",
+        "--source-units",
+        "cm",
+        "--units",
+        "cm",
+    ]);
     let (_, max) = importers::read(&dir.path("stated.abc"))
         .unwrap()
         .bounds()
@@ -56,7 +69,14 @@ fn blender_archive_reads_as_metres() {
 fn bangs_hair_to_abc_reads_as_100_curves_1165_points() {
     let dir = TestDir::new();
     let source = test_data(BANGS_HAIR);
-    dir.run_ok(&["convert", source.to_str().unwrap(), "bangs.abc"]);
+    // For Unreal: centimetres, its groom attributes.
+    dir.run_ok(&[
+        "convert",
+        source.to_str().unwrap(),
+        "bangs.abc",
+        "--target",
+        "unreal",
+    ]);
     let summary = dir.inspect("bangs.abc");
     assert_eq!(summary["format"], "abc");
     assert_eq!(summary["strands"], 100, "{summary}");
@@ -89,9 +109,14 @@ fn bangs_hair_to_abc_reads_as_100_curves_1165_points() {
 fn the_same_conversion_gives_the_same_bytes() {
     let dir = TestDir::new();
     let source = test_data(BANGS_HAIR);
-    dir.run_ok(&["convert", source.to_str().unwrap(), "a.abc"]);
-    dir.run_ok(&["convert", source.to_str().unwrap(), "b.abc"]);
-    dir.run_ok(&["convert", "a.abc", "c.abc"]);
+    let source_text = source.to_str().unwrap();
+    for (input, output) in [
+        (source_text, "a.abc"),
+        (source_text, "b.abc"),
+        ("a.abc", "c.abc"),
+    ] {
+        dir.run_ok(&["convert", input, output, "--target", "unreal"]);
+    }
     let a = std::fs::read(dir.path("a.abc")).unwrap();
     assert!(
         a == std::fs::read(dir.path("b.abc")).unwrap(),
@@ -129,6 +154,7 @@ fn animated_export_reads_one_sample_per_frame_at_the_right_times() {
                     ]
                 })
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let options = exporters::AnimationOptions {

@@ -329,7 +329,8 @@ fn bake_writes_a_sheet_before_and_after_each_stage_and_preview_draws_a_timeline(
         "preview", "t.toml", "-o", "p.png", "--size", "40x40", "--frame", "2",
     ]);
     let (w, h) = png_size(&dir.path("p.png"));
-    assert!((40..80).contains(&w) && h > 40, "one snapshot is {w}x{h}");
+    // --size is the whole picture: one labelled snapshot inside it.
+    assert_eq!((w, h), (40, 40), "one snapshot is {w}x{h}");
     let e = dir.run_fail(&["preview", "t.toml", "-o", "q.png", "--frame", "9"], 2);
     assert!(e.contains("3 snapshots"), "{e}");
 }

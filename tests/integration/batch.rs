@@ -249,11 +249,37 @@ fn bad_manifests_exit_2_naming_the_place() {
 fn slurm_script_is_a_job_array_with_a_merge() {
     let dir = TestDir::new();
     write_manifest(&dir);
-    let out = dir.run_ok(&["batch", "m.toml", "--emit", "slurm"]);
+    let mut manifest = std::fs::read_to_string(dir.path("m.toml")).unwrap();
+    manifest += "[slurm]\ntime = \"00:30:00\"\naccount = \"hair\"\n";
+    std::fs::write(dir.path("m.toml"), manifest).unwrap();
+    let out = dir.run_ok(&[
+        "batch",
+        "m.toml",
+        "--emit",
+        "slurm",
+        "--time",
+        "01:00:00",
+        "--mem",
+        "2G",
+        "--partition",
+        "ci",
+    ]);
     let script = String::from_utf8(out.stdout).unwrap();
     assert!(script.starts_with("#!/bin/bash\n"));
     assert!(script.contains("#SBATCH --array=0-11\n"), "{script}");
-    assert!(script.contains("--shard \"$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT\""));
+    // The flags override the manifest's [slurm]; the rest is taken from it.
+    for line in [
+        "#SBATCH --time=01:00:00\n",
+        "#SBATCH --mem=2G\n",
+        "#SBATCH --partition=ci\n",
+        "#SBATCH --account=hair\n",
+    ] {
+        assert!(script.contains(line), "{line} in {script}");
+    }
+    // N is fixed: a task alone bakes the same job as in the whole array.
+    assert!(script.contains("jobs=12\n"), "{script}");
+    assert!(script.contains("--shard \"$SLURM_ARRAY_TASK_ID/$jobs\""));
+    assert!(!script.contains("SLURM_ARRAY_TASK_COUNT"));
     assert!(script.contains("--dependency=\"afterany:$SLURM_ARRAY_JOB_ID\""));
     assert!(script.contains("--merge"));
     std::fs::write(dir.path("bake.sbatch"), &script).unwrap();
@@ -263,6 +289,45 @@ fn slurm_script_is_a_job_array_with_a_merge() {
         .status()
         .unwrap();
     assert!(check.success(), "the script is not valid bash");
+
+    // Task 3 run alone, as `sbatch --array=3` runs it (not the lowest task
+    // of its submission here, so it submits no merge): job 3 only.
+    let task = std::process::Command::new("bash")
+        .arg(dir.path("bake.sbatch"))
+        .current_dir(dir.root())
+        .env("SLURM_ARRAY_TASK_ID", "3")
+        .env("SLURM_ARRAY_TASK_MIN", "0")
+        .env("SLURM_ARRAY_JOB_ID", "1")
+        .output()
+        .unwrap();
+    assert!(
+        task.status.success(),
+        "{}",
+        String::from_utf8_lossy(&task.stderr)
+    );
+    let baked: Vec<_> = std::fs::read_dir(dir.path("batch_out"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().join("groombake_job.json").is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(baked, ["blow_dry-g4"], "job 3 of the manifest's order");
+
+    // A value sbatch would refuse is refused here, naming it.
+    let stderr = dir.run_fail(&["batch", "m.toml", "--emit", "slurm", "--mem", "8GB"], 2);
+    assert!(stderr.contains("8GB"), "{stderr}");
+    std::fs::write(
+        dir.path("bad.toml"),
+        "[[job]]\ntimeline = \"t.toml\"\n[slurm]\ntime = \"2h\"\n",
+    )
+    .unwrap();
+    let stderr = dir.run_fail(&["batch", "bad.toml", "--emit", "slurm"], 2);
+    assert!(
+        stderr.contains("bad.toml:3") && stderr.contains("slurm time '2h'"),
+        "{stderr}"
+    );
+    let stderr = dir.run_fail(&["batch", "m.toml", "--time", "10"], 2);
+    assert!(stderr.contains("--emit"), "{stderr}");
 }
 
 #[test]

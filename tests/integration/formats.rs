@@ -114,6 +114,7 @@ fn animated_glb_round_trips_its_frames() {
                 .iter()
                 .map(|p| [p[0] + 0.01 * (k as f32 * 0.5).sin() * p[1], p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let options = exporters::AnimationOptions {

@@ -48,8 +48,15 @@ fn unreal_alembic_keeps_the_split_and_round_trips_byte_stable() {
     assert_eq!(closest[3], [0.0, 1.0, 2.0]);
     assert_eq!(vec3s(&source, GROOM_GUIDE_WEIGHTS)[3], [0.6, 0.3, 0.1]);
 
-    dir.run_ok(&["convert", fixture.to_str().unwrap(), "a.abc"]);
-    dir.run_ok(&["convert", "a.abc", "b.abc"]);
+    // For Unreal: its units (cm) and groom attributes.
+    dir.run_ok(&[
+        "convert",
+        fixture.to_str().unwrap(),
+        "a.abc",
+        "--target",
+        "unreal",
+    ]);
+    dir.run_ok(&["convert", "a.abc", "b.abc", "--target", "unreal"]);
     let a = std::fs::read(dir.path("a.abc")).unwrap();
     assert_eq!(a, std::fs::read(dir.path("b.abc")).unwrap());
     let back = read(&dir.path("a.abc"));
@@ -72,8 +79,6 @@ seed = 3
 [groom]
 generate = {{ layout = "scalp", strands = {guides}, length = 0.12, segment_length = 0.03, scalp_angle = 60.0, drape = 8.0 }}
 {render}
-[solver]
-quaternion_mass_scale = 0.1
 [[stage]]
 kind = "settle"
 duration = 0.1
@@ -89,13 +94,16 @@ fn a_bake_grows_render_hair_that_follows_the_guides() {
 [[export]]
 path = "final.abc"
 what = "final"
+target = "unreal"
 [[export]]
 path = "rest.abc"
 what = "rest"
+target = "unreal"
 [[export]]
 path = "anim.abc"
 what = "animated"
 fps = 20
+target = "unreal"
 [[export]]
 path = "final.glb"
 what = "final"
@@ -393,8 +401,6 @@ seed = 1
 [groom]
 generate = {{ layout = "scalp", strands = 100, length = 0.21, segment_length = 0.03, scalp_angle = 95.0, drape = 10.0 }}
 render = {{ count = 10000, seed = 1 }}
-[solver]
-quaternion_mass_scale = 0.1
 [[stage]]
 kind = "settle"
 duration = {duration}
@@ -588,6 +594,7 @@ fn usd_and_gltf_keep_guides_and_render_strands_apart() {
                 .enumerate()
                 .map(|(i, p)| [p[0] + 0.01 * k as f32, p[1], p[2] - 0.001 * (i % 5) as f32])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let (source_guides, source_render) = roles(&animated);

@@ -79,7 +79,8 @@ fn inspect_json_has_the_promised_keys_for_every_format() {
             "data",
             "cm",
         ),
-        ("bangs.obj".into(), "obj", "cm"),
+        // .obj is written in metres by default (what Blender reads).
+        ("bangs.obj".into(), "obj", "m"),
         ("bangs.glb".into(), "gltf", "m"),
         ("bangs.gltf".into(), "gltf", "m"),
         ("bangs.usdc".into(), "usd", "cm"),
@@ -140,6 +141,7 @@ fn inspect_json_counts_the_frames_of_animated_files() {
             let frame = groom::Frame {
                 time: index as f64 / 24.0,
                 points,
+                attributes: Vec::new(),
             };
             writer.write_frame(&frame).unwrap();
         }

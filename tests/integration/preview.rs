@@ -52,6 +52,7 @@ pub(crate) fn animated_swatch(dir: &TestDir) -> String {
                 .iter()
                 .map(|p| [p[0] + 0.03 * f as f32 * -p[1], p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         })
         .collect();
     let path = dir.path("swing.glb");
@@ -121,7 +122,21 @@ fn sheet_of_frames_coloured_by_an_attribute() {
         "bond_hydrogen",
     ]);
     let (width, height, pixels) = decode(&dir.path("sheet.png"));
-    // Two pictures side by side, with a label strip above them.
+    // --size is the whole picture: two pictures side by side under
+    // their labels share it.
+    assert_eq!((width, height), (200, 150));
+    // --panel-size is each picture's: two side by side, a label strip above.
+    dir.run_ok(&[
+        "preview",
+        &file,
+        "-o",
+        "panels.png",
+        "--frames",
+        "0,2",
+        "--panel-size",
+        "200x150",
+    ]);
+    let (width, height, _) = decode(&dir.path("panels.png"));
     assert!(width > 400 && width < 420, "{width}");
     assert!(height > 150 && height < 190, "{height}");
     // Both ends of the ramp appear (the strands and the legend).

@@ -132,6 +132,7 @@ fn animated_groom(frames: usize) -> Groom {
                 .iter()
                 .map(|p| [p[0] + sway * -p[1], p[1], p[2]])
                 .collect(),
+            attributes: Vec::new(),
         });
     }
     groom

@@ -15,6 +15,7 @@ use std::io::{self, Seek, Write};
 pub enum Pod {
     Bool = 0,
     U8 = 1,
+    I16 = 4,
     I32 = 6,
     F32 = 10,
     F64 = 11,
@@ -24,6 +25,7 @@ impl Pod {
     pub fn size(self) -> usize {
         match self {
             Pod::Bool | Pod::U8 => 1,
+            Pod::I16 => 2,
             Pod::I32 | Pod::F32 => 4,
             Pod::F64 => 8,
         }
@@ -34,6 +36,7 @@ impl Pod {
         match self {
             Pod::Bool => "bool_t",
             Pod::U8 => "uint8_t",
+            Pod::I16 => "int16_t",
             Pod::I32 => "int32_t",
             Pod::F32 => "float32_t",
             Pod::F64 => "float64_t",

@@ -3,11 +3,13 @@
 //! `curveBasisAndType`, `width`, `uv` and `.arbGeomParams` with the other
 //! attributes and the Unreal Engine groom attributes (`groom_*`).
 //!
-//! Unreal reads Alembic grooms as centimetres, Y up: the groom is converted
-//! to that before writing.
+//! The file holds the groom's units (recorded as `groombake_units` in the
+//! archive metadata, since Alembic has no unit field), Y up, the axis every
+//! Alembic reader assumes: the groom is rotated to Y up before writing. The
+//! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
 
 use super::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter, TimeSampling};
-use crate::{AnimationOptions, ExportError, FrameWriter};
+use crate::{AnimationOptions, AttributeSet, ExportError, FrameWriter};
 use groom::{AtomicFile, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::{Path, PathBuf};
 
@@ -15,7 +17,7 @@ const CURVES_SCHEMA: &str = "AbcGeom_Curve_v2";
 const GEOM_BASE: &str = "AbcGeom_GeomBase_v1";
 const XFORM_SCHEMA: &str = "AbcGeom_Xform_v3";
 /// The groom schema version Unreal's importer is written for.
-const UNREAL_GROOM_VERSION: (i32, i32) = (1, 5);
+const UNREAL_GROOM_VERSION: (i16, i16) = (1, 5);
 /// Frame times closer than this to a uniform grid are written as uniform
 /// sampling.
 const UNIFORM_TOLERANCE: f64 = 1e-6;
@@ -31,7 +33,7 @@ fn io_error(path: &Path) -> impl Fn(std::io::Error) -> ExportError + '_ {
 
 /// Writes a static groom; a groom with frames is written animated, at the
 /// rate its frame times give.
-pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
+pub fn write(path: &Path, groom: &Groom, attributes: AttributeSet) -> Result<(), ExportError> {
     if !groom.frames.is_empty() {
         let fps = match (groom.frames.first(), groom.frames.get(1)) {
             (Some(a), Some(b)) if b.time > a.time => 1.0 / (b.time - a.time),
@@ -41,15 +43,15 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
             fps,
             frame_count: groom.frames.len(),
         };
-        let mut writer = animated(path, groom, options)?;
+        let mut writer = animated(path, groom, options, attributes)?;
         for frame in &groom.frames {
             writer.write_frame(frame)?;
         }
         return writer.finish();
     }
-    let mut export = CurvesExport::start(path, groom, None)?;
+    let mut export = CurvesExport::start(path, groom, None, attributes)?;
     let points = export.converted(&groom.points);
-    export.add_sample(&points)?;
+    export.add_sample(&points, Vec::new())?;
     export.finish()
 }
 
@@ -58,6 +60,7 @@ pub fn animated(
     path: &Path,
     groom: &Groom,
     options: AnimationOptions,
+    attributes: AttributeSet,
 ) -> Result<Box<dyn FrameWriter>, ExportError> {
     if !(options.fps.is_finite() && options.fps > 0.0) {
         return Err(ExportError::Invalid {
@@ -69,6 +72,7 @@ pub fn animated(
         path,
         groom,
         Some(options.fps),
+        attributes,
     )?))
 }
 
@@ -80,8 +84,16 @@ struct CurvesExport {
     /// `nVertices`, `curveBasisAndType`, `uv`, `width`: set once, repeated
     /// for every further frame.
     fixed: Vec<PropertyWriter>,
-    /// The children of `.arbGeomParams`, likewise.
+    /// The children of `.arbGeomParams`, likewise, except those a frame
+    /// gives new values ([`Frame::attributes`]): a sample per frame (one
+    /// that holds is stored once).
     arbitrary: Vec<PropertyWriter>,
+    /// Per child of `.arbGeomParams`: the groom attribute it holds (if
+    /// any), its scope, type and extent, and its first sample's bytes
+    /// until the first frame (which may give its own).
+    arbitrary_sources: Vec<ArbitrarySource>,
+    /// The time-varying attributes every frame carries (the first sets them).
+    animated: Option<Vec<String>>,
     samples: usize,
     positions: PropertyWriter,
     bounds: PropertyWriter,
@@ -93,6 +105,15 @@ struct CurvesExport {
     source_up: UpAxis,
     fps: Option<f64>,
     times: Vec<f64>,
+}
+
+/// What a child of `.arbGeomParams` holds, for a frame to give it values.
+struct ArbitrarySource {
+    attribute: Option<String>,
+    scope: &'static str,
+    pod: Pod,
+    extent: u8,
+    first: Option<Vec<u8>>,
 }
 
 fn values_bytes(values: &AttributeValues) -> (Pod, u8, Vec<u8>) {
@@ -211,7 +232,12 @@ fn bounds_bytes(points: &[[f32; 3]]) -> Vec<u8> {
 }
 
 impl CurvesExport {
-    fn start(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesExport, ExportError> {
+    fn start(
+        path: &Path,
+        groom: &Groom,
+        fps: Option<f64>,
+        attributes: AttributeSet,
+    ) -> Result<CurvesExport, ExportError> {
         let file = AtomicFile::create(path).map_err(io_error(path))?;
         let mut archive = ArchiveWriter::new(file).map_err(io_error(path))?;
         // Index 1 is the animation's sampling; its times are set at the end.
@@ -224,13 +250,26 @@ impl CurvesExport {
         y_up.convert_to(groom.units, UpAxis::Y);
         let fixed = Self::fixed_properties(&mut archive, &y_up, animated_sampling)
             .map_err(io_error(path))?;
-        let arbitrary = Self::arbitrary_properties(&mut archive, &y_up, animated_sampling)
-            .map_err(io_error(path))?;
+        let (mut arbitrary, mut arbitrary_sources) =
+            Self::arbitrary_properties(&y_up, animated_sampling, attributes);
+        // A static export has no frame to give values: its samples go in
+        // now, where they always have (the file's bytes stay the same).
+        if fps.is_none() {
+            for (property, source) in arbitrary.iter_mut().zip(&mut arbitrary_sources) {
+                if let Some(bytes) = source.first.take() {
+                    property
+                        .set_sample(&mut archive, &bytes)
+                        .map_err(io_error(path))?;
+                }
+            }
+        }
         Ok(CurvesExport {
             path: path.to_path_buf(),
             archive,
             fixed,
             arbitrary,
+            arbitrary_sources,
+            animated: None,
             samples: 0,
             positions: PropertyWriter::new(
                 "P",
@@ -318,54 +357,68 @@ impl CurvesExport {
         Ok(open)
     }
 
-    /// The Unreal groom attributes, then every attribute not written as
-    /// `width` or `uv`, each under its own name.
+    /// The children of `.arbGeomParams` (with `WithUnreal`, the Unreal groom
+    /// attributes first, the version as int16 scalars as Unreal's Alembic
+    /// groom schema gives it), then every attribute not written as `width`
+    /// or `uv`, each under its own name; with their first samples' bytes
+    /// (written with the first frame, or by a static export).
     fn arbitrary_properties(
-        archive: &mut ArchiveWriter<AtomicFile>,
         groom: &Groom,
         sampling: u32,
-    ) -> std::io::Result<Vec<PropertyWriter>> {
+        attributes: AttributeSet,
+    ) -> (Vec<PropertyWriter>, Vec<ArbitrarySource>) {
         let strands = groom.strand_count();
-        let mut params: Vec<(String, &'static str, AttributeValues)> = vec![
-            (
-                "groom_version_major".into(),
-                "con",
-                AttributeValues::Int(vec![UNREAL_GROOM_VERSION.0]),
-            ),
-            (
-                "groom_version_minor".into(),
-                "con",
-                AttributeValues::Int(vec![UNREAL_GROOM_VERSION.1]),
-            ),
-            (
-                "groom_guide".into(),
-                "uni",
-                AttributeValues::Int(vec![0; strands]),
-            ),
-            (
-                "groom_group_id".into(),
-                "uni",
-                AttributeValues::Int(vec![0; strands]),
-            ),
-        ];
-        if let Some(uv) = root_uv(groom) {
-            params.push(("groom_root_uv".into(), "uni", AttributeValues::Vec2(uv)));
-        }
+        type Param = (String, &'static str, AttributeValues, Option<String>);
+        let mut params: Vec<Param> = Vec::new();
         let width = width_attribute(groom);
-        if let Some(width) = width {
-            params.push((
-                "groom_width".into(),
-                scope_code(width.scope),
-                width.values.clone(),
-            ));
+        if attributes == AttributeSet::WithUnreal {
+            params.extend([
+                (
+                    "groom_guide".into(),
+                    "uni",
+                    AttributeValues::Int(vec![0; strands]),
+                    None,
+                ),
+                (
+                    "groom_group_id".into(),
+                    "uni",
+                    AttributeValues::Int(vec![0; strands]),
+                    None,
+                ),
+            ]);
+            if let Some(uv) = root_uv(groom) {
+                params.push((
+                    "groom_root_uv".into(),
+                    "uni",
+                    AttributeValues::Vec2(uv),
+                    None,
+                ));
+            }
+            if let Some(width) = width {
+                params.push((
+                    "groom_width".into(),
+                    scope_code(width.scope),
+                    width.values.clone(),
+                    None,
+                ));
+            }
         }
+        // A per-strand `root_uv` is the curves' `uv` (above); any other
+        // (per vertex, as a scalp scatter writes it) is kept as a
+        // parameter of its own rather than dropped without a word.
+        let uv_written = root_uv(groom).is_some();
         for attribute in &groom.attributes {
             let is_width = width.is_some_and(|w| w.name == attribute.name);
-            if is_width || attribute.name == ROOT_UV {
+            if is_width || (attribute.name == ROOT_UV && uv_written) {
                 continue;
             }
             let name = property_name(&attribute.name);
-            let value = (name, scope_code(attribute.scope), attribute.values.clone());
+            let value = (
+                name,
+                scope_code(attribute.scope),
+                attribute.values.clone(),
+                Some(attribute.name.clone()),
+            );
             // A groom attribute of the same name replaces the default.
             match params.iter_mut().find(|p| p.0 == value.0) {
                 Some(existing) => *existing = value,
@@ -373,7 +426,33 @@ impl CurvesExport {
             }
         }
         let mut open = Vec::new();
-        for (name, scope, values) in params {
+        let mut sources = Vec::new();
+        if attributes == AttributeSet::WithUnreal {
+            for (name, value) in [
+                ("groom_version_major", UNREAL_GROOM_VERSION.0),
+                ("groom_version_minor", UNREAL_GROOM_VERSION.1),
+            ] {
+                if groom.attribute(name).is_some() {
+                    continue;
+                }
+                open.push(PropertyWriter::new(
+                    name,
+                    geom_param_metadata("con", Pod::I16, 1),
+                    PropertyKind::Array,
+                    Pod::I16,
+                    1,
+                    sampling,
+                ));
+                sources.push(ArbitrarySource {
+                    attribute: None,
+                    scope: "con",
+                    pod: Pod::I16,
+                    extent: 1,
+                    first: Some(value.to_le_bytes().to_vec()),
+                });
+            }
+        }
+        for (name, scope, values, attribute) in params {
             let (pod, extent, bytes, metadata) = match unreal_triple(&name, &values) {
                 Some((pod, bytes)) => (pod, 1, bytes, triple_metadata(scope, pod)),
                 None => {
@@ -381,12 +460,53 @@ impl CurvesExport {
                     (pod, extent, bytes, geom_param_metadata(scope, pod, extent))
                 }
             };
-            let mut property =
-                PropertyWriter::new(&name, metadata, PropertyKind::Array, pod, extent, sampling);
-            property.set_sample(archive, &bytes)?;
-            open.push(property);
+            open.push(PropertyWriter::new(
+                &name,
+                metadata,
+                PropertyKind::Array,
+                pod,
+                extent,
+                sampling,
+            ));
+            sources.push(ArbitrarySource {
+                attribute,
+                scope,
+                pod,
+                extent,
+                first: Some(bytes),
+            });
         }
-        Ok(open)
+        (open, sources)
+    }
+
+    /// The bytes of each `.arbGeomParams` child a frame gives values to.
+    fn frame_arbitrary(&self, frame: &Frame) -> Result<Vec<Option<Vec<u8>>>, ExportError> {
+        let mut out: Vec<Option<Vec<u8>>> = vec![None; self.arbitrary_sources.len()];
+        for attribute in &frame.attributes {
+            let found = self
+                .arbitrary_sources
+                .iter()
+                .position(|s| s.attribute.as_deref() == Some(attribute.name.as_str()));
+            let invalid = |what: &str| ExportError::Invalid {
+                file: self.path.clone(),
+                message: format!(
+                    "frame at {} s: attribute '{}' {what}",
+                    frame.time, attribute.name
+                ),
+            };
+            let Some(index) = found else {
+                return Err(invalid("is not an attribute of the groom's"));
+            };
+            let source = &self.arbitrary_sources[index];
+            let (pod, extent, bytes) = values_bytes(&attribute.values);
+            if (pod, extent, scope_code(attribute.scope))
+                != (source.pod, source.extent, source.scope)
+            {
+                return Err(invalid("is not of the groom's type and scope"));
+            }
+            out[index] = Some(bytes);
+        }
+        Ok(out)
     }
 
     /// Points of the groom's axis, Y up.
@@ -394,7 +514,14 @@ impl CurvesExport {
         points.iter().map(|&p| self.source_up.to_y_up(p)).collect()
     }
 
-    fn add_sample(&mut self, points: &[[f32; 3]]) -> Result<(), ExportError> {
+    /// Adds a sample of every property: `points`, and the values `arbitrary`
+    /// gives the children of `.arbGeomParams` (a frame's time-varying
+    /// attributes; the others repeat their first sample).
+    fn add_sample(
+        &mut self,
+        points: &[[f32; 3]],
+        arbitrary: Vec<Option<Vec<u8>>>,
+    ) -> Result<(), ExportError> {
         let bytes = f32_bytes(points.iter().flatten().copied());
         let path = self.path.clone();
         self.positions
@@ -406,8 +533,24 @@ impl CurvesExport {
         // Every property of the schema has a sample per frame; the ones that
         // do not change are stored once and repeated.
         if self.samples > 0 {
-            for property in self.fixed.iter_mut().chain(self.arbitrary.iter_mut()) {
+            for property in &mut self.fixed {
                 property.repeat_previous();
+            }
+        }
+        for ((property, source), given) in self
+            .arbitrary
+            .iter_mut()
+            .zip(&mut self.arbitrary_sources)
+            .zip(arbitrary.into_iter().chain(std::iter::repeat(None)))
+        {
+            let first = source.first.take();
+            match given.or(first) {
+                Some(bytes) => property
+                    .set_sample(&mut self.archive, &bytes)
+                    .map_err(io_error(&path))?,
+                // (A static export's one sample went in at the start.)
+                None if self.samples > 0 => property.repeat_previous(),
+                None => {}
             }
         }
         self.samples += 1;
@@ -558,8 +701,22 @@ impl FrameWriter for CurvesExport {
                 });
             }
         }
+        let mut names = self.animated.take();
+        let these: Vec<String> = frame.attributes.iter().map(|a| a.name.clone()).collect();
+        if names.as_ref().is_some_and(|n| *n != these) {
+            return Err(ExportError::Invalid {
+                file: self.path.clone(),
+                message: format!(
+                    "frame at {} s animates other attributes than the first frame",
+                    frame.time
+                ),
+            });
+        }
+        names.get_or_insert(these);
+        self.animated = names;
+        let arbitrary = self.frame_arbitrary(frame)?;
         let points = self.converted(&frame.points);
-        self.add_sample(&points)?;
+        self.add_sample(&points, arbitrary)?;
         self.times.push(frame.time);
         Ok(())
     }
@@ -645,7 +802,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("groombake-abc-hash-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("two.abc");
-        write(&path, &two_strands()).unwrap();
+        write(&path, &two_strands(), AttributeSet::default()).unwrap();
         let ours = std::fs::read(&path).unwrap();
         let reference = include_bytes!("../../tests/data/reference_static.abc");
         assert_eq!(object_hashes(&ours), object_hashes(reference));
@@ -666,11 +823,12 @@ mod tests {
             fps: 24.0,
             frame_count: 4,
         };
-        let mut writer = animated(&path, &groom, options).unwrap();
+        let mut writer = animated(&path, &groom, options, AttributeSet::default()).unwrap();
         for (i, pose) in [&pose_a, &pose_b, &pose_a, &pose_a].into_iter().enumerate() {
             let frame = Frame {
                 time: 0.5 + i as f64 / 24.0,
                 points: pose.clone(),
+                attributes: Vec::new(),
             };
             writer.write_frame(&frame).unwrap();
         }
@@ -686,8 +844,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("groombake-abc-det-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (a, b) = (dir.join("a.abc"), dir.join("b.abc"));
-        write(&a, &two_strands()).unwrap();
-        write(&b, &two_strands()).unwrap();
+        write(&a, &two_strands(), AttributeSet::default()).unwrap();
+        write(&b, &two_strands(), AttributeSet::default()).unwrap();
         assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -31,6 +31,7 @@ mod type_id {
     pub const TOKEN: u8 = 11;
     pub const VEC2F: u8 = 20;
     pub const VEC3F: u8 = 24;
+    pub const VEC3I: u8 = 26;
     pub const TOKEN_VECTOR: u8 = 41;
     pub const SPECIFIER: u8 = 42;
     pub const VARIABILITY: u8 = 44;
@@ -157,6 +158,11 @@ impl CrateWriter {
                 v.iter().flatten().flat_map(|x| x.to_le_bytes()),
             )?,
             PropertyValue::Float3s(v) => self.write_float3s(v)?,
+            PropertyValue::Int3s(v) => self.write_array(
+                type_id::VEC3I,
+                v.len(),
+                v.iter().flatten().flat_map(|x| x.to_le_bytes()),
+            )?,
         }))
     }
 
@@ -626,6 +632,11 @@ pub(super) struct AnimatedCrate {
     writer: CrateWriter,
     scene: CurvesScene,
     samples: Samples,
+    /// The time-varying attributes every frame carries (the first sets them).
+    animated: Option<Vec<String>>,
+    /// The last value written of each time-varying property and its rep: a
+    /// value that holds from one frame to the next is stored once.
+    last: BTreeMap<(usize, String), (PropertyValue, u64)>,
 }
 
 impl AnimatedCrate {
@@ -648,6 +659,8 @@ impl AnimatedCrate {
                     })
                     .collect(),
             },
+            animated: None,
+            last: BTreeMap::new(),
         })
     }
 }
@@ -663,6 +676,7 @@ impl FrameWriter for AnimatedCrate {
                 message: format!("frame time codes must increase (time code {code})"),
             });
         }
+        super::frame_values::check_names(&self.writer.path, &mut self.animated, frame)?;
         for (index, prim) in self.scene.prims.iter().enumerate() {
             let points = prim.points_of(&frame.points);
             let points_rep = self.writer.write_float3s(&points)?;
@@ -671,6 +685,20 @@ impl FrameWriter for AnimatedCrate {
                 if let Some(reps) = self.samples.reps.get_mut(&(index, name.to_string())) {
                     reps.push(rep);
                 }
+            }
+            for (property, value) in
+                super::frame_values::prim_values(&self.writer.path, prim, frame)?
+            {
+                let key = (index, property);
+                let rep = match self.last.get(&key) {
+                    Some((last, rep)) if *last == value => *rep,
+                    _ => {
+                        let rep = self.writer.write_value(&value)?.unwrap_or_default();
+                        self.last.insert(key.clone(), (value, rep));
+                        rep
+                    }
+                };
+                self.samples.reps.entry(key).or_default().push(rep);
             }
         }
         self.samples.times.push(code);

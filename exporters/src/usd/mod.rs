@@ -9,6 +9,7 @@
 //! the order attributes were added in.
 
 mod crate_writer;
+mod frame_values;
 mod usda;
 
 use crate::{AnimationOptions, ExportError, FrameWriter};
@@ -204,6 +205,7 @@ pub fn write_sequence(
             groom,
             CURVES_PRIM.to_string(),
             std::iter::once(0..groom.points.len()).collect(),
+            std::iter::once(0..groom.strand_count()).collect(),
         )?;
         let shape = |p: &CurvesPrim| -> Vec<(String, &'static str)> {
             p.properties
@@ -219,6 +221,7 @@ pub fn write_sequence(
         let rest = [Frame {
             time: 0.0,
             points: groom.points.clone(),
+            attributes: Vec::new(),
         }];
         let frames = if groom.frames.is_empty() {
             &rest[..]
@@ -287,6 +290,7 @@ pub(crate) enum PropertyValue {
     Floats(Vec<f32>),
     Float2s(Vec<[f32; 2]>),
     Float3s(Vec<[f32; 3]>),
+    Int3s(Vec<[i32; 3]>),
 }
 
 /// One attribute of the curves prim.
@@ -316,6 +320,11 @@ pub(crate) struct CurvesPrim {
     /// The groom's vertices this prim holds, in order (a frame's points
     /// for this prim are these ranges of the frame).
     pub vertex_ranges: Vec<Range<usize>>,
+    /// The groom's strands this prim holds, in order (for per-strand
+    /// values of a frame's attributes).
+    pub strand_ranges: Vec<Range<usize>>,
+    /// Each groom attribute's property: (attribute name, property name).
+    pub attribute_properties: Vec<(String, String)>,
     /// Half the largest width: the extent grows by it, as USD's own
     /// `UsdGeomCurves::ComputeExtent` does.
     pub extent_padding: f32,
@@ -378,17 +387,23 @@ impl CurvesScene {
                 groom,
                 CURVES_PRIM.to_string(),
                 std::iter::once(0..groom.points.len()).collect(),
+                std::iter::once(0..groom.strand_count()).collect(),
             )?]
         } else {
             let offsets = groom.strand_offsets();
             let mut prims = Vec::with_capacity(groups.len());
             for (key, strands) in groups {
                 let mut ranges: Vec<Range<usize>> = Vec::new();
+                let mut strand_ranges: Vec<Range<usize>> = Vec::new();
                 for &s in &strands {
                     let range = offsets[s]..offsets[s + 1];
                     match ranges.last_mut() {
                         Some(last) if last.end == range.start => last.end = range.end,
                         _ => ranges.push(range),
+                    }
+                    match strand_ranges.last_mut() {
+                        Some(last) if last.end == s => last.end = s + 1,
+                        _ => strand_ranges.push(s..s + 1),
                     }
                 }
                 let mut part = groom.select_strands(&strands);
@@ -402,7 +417,7 @@ impl CurvesScene {
                         .insert("usd.wrap".into(), wrap.into());
                 }
                 let name = key.name(split_roles, mixed_curves);
-                prims.push(curves_prim(path, &part, name, ranges)?);
+                prims.push(curves_prim(path, &part, name, ranges, strand_ranges)?);
             }
             prims
         };
@@ -427,6 +442,7 @@ impl CurvesScene {
                 PropertyValue::Floats(v) => *v = Vec::new(),
                 PropertyValue::Float2s(v) => *v = Vec::new(),
                 PropertyValue::Float3s(v) => *v = Vec::new(),
+                PropertyValue::Int3s(v) => *v = Vec::new(),
             }
         }
     }
@@ -471,6 +487,7 @@ fn curves_prim(
     groom: &Groom,
     name: String,
     vertex_ranges: Vec<Range<usize>>,
+    strand_ranges: Vec<Range<usize>>,
 ) -> Result<CurvesPrim, ExportError> {
     let invalid = |message: String| ExportError::Invalid {
         file: path.to_path_buf(),
@@ -516,6 +533,7 @@ fn curves_prim(
         properties.push(token_property("basis", basis));
     }
     let mut max_width = 0.0f32;
+    let mut attribute_properties = Vec::new();
     for attribute in &groom.attributes {
         let interpolation = match attribute.scope {
             Scope::Vertex => "vertex",
@@ -535,6 +553,13 @@ fn curves_prim(
                 "texCoord2f[]",
                 PropertyValue::Float2s(v.clone()),
             ),
+            // Guide indices are integers, as Unreal's Alembic schema and
+            // groombake's Alembic writer store them (int32 x 3).
+            (groom::guides::GROOM_CLOSEST_GUIDES, AttributeValues::Vec3(v)) => (
+                format!("primvars:{}", groom::guides::GROOM_CLOSEST_GUIDES),
+                "int3[]",
+                PropertyValue::Int3s(v.iter().map(|g| g.map(|x| x.round() as i32)).collect()),
+            ),
             (attribute_name, values) => {
                 let name = format!("primvars:{}", identifier(attribute_name));
                 let type_name = declared_type(groom, attribute_name, values);
@@ -553,6 +578,7 @@ fn curves_prim(
             }
         };
         let name = unique_name(&properties, name);
+        attribute_properties.push((attribute.name.clone(), name.clone()));
         properties.push(Property {
             name,
             type_name,
@@ -574,6 +600,8 @@ fn curves_prim(
         name,
         properties,
         vertex_ranges,
+        strand_ranges,
+        attribute_properties,
         extent_padding,
         sampled: Vec::new(),
     })

@@ -136,6 +136,7 @@ fn streamed_frames_are_checked() {
         let wrong = Frame {
             time: 0.0,
             points: vec![[0.0; 3]; 3],
+            attributes: Vec::new(),
         };
         assert!(
             writer.write_frame(&wrong).is_err(),
@@ -144,6 +145,7 @@ fn streamed_frames_are_checked() {
         let frame = Frame {
             time: 1.0,
             points: groom.points.clone(),
+            attributes: Vec::new(),
         };
         writer.write_frame(&frame).unwrap();
         assert!(

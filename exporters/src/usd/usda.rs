@@ -139,6 +139,9 @@ fn write_value(text: &mut String, value: &PropertyValue) {
             let _ = write!(t, "({}, {})", Num(v[0]), Num(v[1]));
         }),
         PropertyValue::Float3s(values) => write_float3s(text, values),
+        PropertyValue::Int3s(values) => write_list(text, values, |t, v| {
+            let _ = write!(t, "({}, {}, {})", v[0], v[1], v[2]);
+        }),
     }
 }
 
@@ -182,10 +185,12 @@ struct SpillFile {
 }
 
 impl SpillFile {
-    fn create(destination: &Path, prim: usize) -> io::Result<SpillFile> {
+    /// A spill file named by `tag` (the prim's index, then the index of a
+    /// time-varying attribute).
+    fn create(destination: &Path, tag: &str) -> io::Result<SpillFile> {
         let mut name = std::ffi::OsString::from(".");
         name.push(destination.file_name().unwrap_or_default());
-        name.push(format!(".{}.{prim}.frames.tmp", std::process::id()));
+        name.push(format!(".{}.{tag}.frames.tmp", std::process::id()));
         let path = destination.with_file_name(name);
         let file = File::create(&path)?;
         Ok(SpillFile {
@@ -226,6 +231,11 @@ pub(super) struct AnimatedUsda {
     codes: Vec<f64>,
     /// Per prim, the extent of each frame.
     extents: Vec<Vec<[[f32; 3]; 2]>>,
+    /// Per prim, the samples of each time-varying attribute: its property,
+    /// USD type and spill file (made at the first frame).
+    attribute_spills: Vec<Vec<(String, &'static str, SpillFile)>>,
+    /// The time-varying attributes every frame carries (the first sets them).
+    animated: Option<Vec<String>>,
     line: String,
 }
 
@@ -234,7 +244,7 @@ impl AnimatedUsda {
         let io_error = |e| ExportError::io(path, e);
         let mut spills = Vec::with_capacity(scene.prims.len());
         for (index, prim) in scene.prims.iter().enumerate() {
-            let mut spill = SpillFile::create(path, index).map_err(io_error)?;
+            let mut spill = SpillFile::create(path, &index.to_string()).map_err(io_error)?;
             let writer = spill.writer().map_err(io_error)?;
             writer
                 .write_all(prim_opening(prim).as_bytes())
@@ -247,12 +257,15 @@ impl AnimatedUsda {
         // is needed until the end.
         scene.forget_values();
         let extents = vec![Vec::new(); scene.prims.len()];
+        let attribute_spills = (0..scene.prims.len()).map(|_| Vec::new()).collect();
         Ok(AnimatedUsda {
             path: path.to_path_buf(),
             scene,
             spills,
             codes: Vec::new(),
             extents,
+            attribute_spills,
+            animated: None,
             line: String::new(),
         })
     }
@@ -269,7 +282,41 @@ impl FrameWriter for AnimatedUsda {
                 message: format!("frame time codes must increase (time code {code})"),
             });
         }
+        super::frame_values::check_names(&self.path, &mut self.animated, frame)?;
+        let first = self.codes.is_empty();
         self.codes.push(code);
+        for (index, (prim, attribute_spills)) in self
+            .scene
+            .prims
+            .iter()
+            .zip(&mut self.attribute_spills)
+            .enumerate()
+        {
+            let values = super::frame_values::prim_values(&self.path, prim, frame)?;
+            for (k, (property, value)) in values.into_iter().enumerate() {
+                if first {
+                    let type_name = prim
+                        .properties
+                        .iter()
+                        .find(|p| p.name == property)
+                        .map_or("float[]", |p| p.type_name);
+                    let spill = SpillFile::create(&self.path, &format!("{index}.{k}"))
+                        .map_err(|e| ExportError::io(&self.path, e))?;
+                    attribute_spills.push((property, type_name, spill));
+                }
+                let Some((_, _, spill)) = attribute_spills.get_mut(k) else {
+                    continue;
+                };
+                self.line.clear();
+                let _ = write!(self.line, "            {}: ", Num(code));
+                write_value(&mut self.line, &value);
+                self.line.push_str(",\n");
+                spill
+                    .writer()
+                    .and_then(|w| w.write_all(self.line.as_bytes()))
+                    .map_err(|e| ExportError::io(&self.path, e))?;
+            }
+        }
         for ((prim, spill), extents) in self
             .scene
             .prims
@@ -303,7 +350,12 @@ impl FrameWriter for AnimatedUsda {
         let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
         file.write_all(header(&this.scene, Some((start, end))).as_bytes())
             .map_err(io_error)?;
-        for (mut spill, extents) in this.spills.into_iter().zip(&this.extents) {
+        for ((mut spill, extents), attributes) in this
+            .spills
+            .into_iter()
+            .zip(&this.extents)
+            .zip(this.attribute_spills)
+        {
             let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
             for (code, extent) in this.codes.iter().zip(extents) {
                 let _ = write!(tail, "            {}: ", Num(*code));
@@ -312,12 +364,18 @@ impl FrameWriter for AnimatedUsda {
             }
             tail.push_str("        }\n");
             let spill_writer = spill.writer().map_err(io_error)?;
-            spill_writer
-                .write_all(tail.as_bytes())
-                .and_then(|()| spill_writer.write_all(PRIM_CLOSING))
-                .map_err(io_error)?;
+            spill_writer.write_all(tail.as_bytes()).map_err(io_error)?;
             let (mut body, _spill) = spill.into_reader().map_err(io_error)?;
             io::copy(&mut body, &mut file).map_err(io_error)?;
+            // The time-varying primvars' samples, beside their defaults.
+            for (property, type_name, samples) in attributes {
+                let opening = format!("        {type_name} {property}.timeSamples = {{\n");
+                file.write_all(opening.as_bytes()).map_err(io_error)?;
+                let (mut body, _samples) = samples.into_reader().map_err(io_error)?;
+                io::copy(&mut body, &mut file).map_err(io_error)?;
+                file.write_all(b"        }\n").map_err(io_error)?;
+            }
+            file.write_all(PRIM_CLOSING).map_err(io_error)?;
         }
         file.write_all(ROOT_CLOSING).map_err(io_error)?;
         file.commit().map_err(io_error)

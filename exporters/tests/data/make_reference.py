@@ -63,8 +63,17 @@ def ints(vals):
         a[i] = x
     return a
 S = AbcGeom.GeometryScope
-for name, scope, vals in [("groom_version_major", S.kConstantScope, [1]), ("groom_version_minor", S.kConstantScope, [5]),
-                          ("groom_guide", S.kUniformScope, [0, 0]), ("groom_group_id", S.kUniformScope, [0, 0])]:
+# Unreal's Alembic groom schema: the version is int16.
+def shorts(vals):
+    a = imath.ShortArray(len(vals))
+    for i, x in enumerate(vals):
+        a[i] = x
+    return a
+for name, vals in [("groom_version_major", [1]), ("groom_version_minor", [5])]:
+    p = AbcGeom.OInt16GeomParam(arb, name, False, S.kConstantScope, 1, Abc.Argument(ts))
+    for _ in poses:
+        p.set(AbcGeom.OInt16GeomParamSample(shorts(vals), S.kConstantScope))
+for name, scope, vals in [("groom_guide", S.kUniformScope, [0, 0]), ("groom_group_id", S.kUniformScope, [0, 0])]:
     p = AbcGeom.OInt32GeomParam(arb, name, False, scope, 1, Abc.Argument(ts))
     for _ in poses:
         p.set(AbcGeom.OInt32GeomParamSample(ints(vals), scope))

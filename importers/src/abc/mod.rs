@@ -287,6 +287,7 @@ mod tests {
             .map(|&time| Frame {
                 time,
                 points: groom.points.clone(),
+                attributes: Vec::new(),
             })
             .collect();
         groom
@@ -341,15 +342,13 @@ mod tests {
         for name in ["width", "root_uv", "wetness", "bond_rates", "clump"] {
             assert_eq!(back.attribute(name), groom.attribute(name), "{name}");
         }
-        // Unreal's per-strand and per-vertex groom attributes come back too.
-        assert_eq!(
-            back.attribute("groom_width").map(|a| &a.values),
-            groom.attribute("width").map(|a| &a.values)
-        );
-        assert_eq!(
-            back.attribute("groom_guide").map(|a| (&a.values, a.scope)),
-            Some((&AttributeValues::Int(vec![0, 0]), Scope::Strand))
-        );
+        // Unreal's groom_width repeats width: one attribute per meaning.
+        assert!(back.attribute("groom_width").is_none());
+        assert!(back.attribute("groom_root_uv").is_none());
+        // Unreal's defaults (no guides, one group) mean what their absence
+        // means: not kept.
+        assert!(back.attribute("groom_guide").is_none());
+        assert!(back.attribute("groom_group_id").is_none());
         assert!(back.provenance.info.starts_with("groombake "));
     }
 
@@ -415,6 +414,7 @@ mod tests {
                     .iter()
                     .map(|p| [p[0] + i as f32, p[1], p[2] - 0.5 * i as f32])
                     .collect(),
+                attributes: Vec::new(),
             };
             writer.write_frame(&frame).unwrap();
             frames.push(frame);
@@ -525,6 +525,7 @@ mod tests {
                     .iter()
                     .map(|p| [p[0], p[1] + i as f32, p[2]])
                     .collect(),
+                attributes: Vec::new(),
             })
             .collect();
         for bytes in [

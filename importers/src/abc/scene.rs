@@ -127,6 +127,9 @@ struct Part {
     times: Vec<f64>,
     basis: CurveBasis,
     attributes: Vec<Attribute>,
+    /// `.arbGeomParams` whose samples change with `P`'s: each one's value
+    /// at every sample (as a bake writes its bond rates and wetness).
+    frame_attributes: Vec<Vec<Attribute>>,
 }
 
 struct SceneReader<'r, 'a> {
@@ -421,6 +424,7 @@ impl SceneReader<'_, '_> {
             times,
             basis,
             attributes: Vec::new(),
+            frame_attributes: Vec::new(),
         };
         let vertex_count = total as usize;
         for property in &geom.children {
@@ -430,7 +434,7 @@ impl SceneReader<'_, '_> {
                 _ => continue,
             };
             if let Some(attribute) =
-                self.geom_param(property, &name, vertex_count, part.counts.len())?
+                self.geom_param(property, &name, vertex_count, part.counts.len(), 0)?
             {
                 part.attributes.push(attribute);
             }
@@ -439,8 +443,33 @@ impl SceneReader<'_, '_> {
             for property in &arbitrary.children {
                 let name = property.name.clone();
                 if let Some(attribute) =
-                    self.geom_param(property, &name, vertex_count, part.counts.len())?
+                    self.geom_param(property, &name, vertex_count, part.counts.len(), 0)?
                 {
+                    // Sampled with `P` and not the same throughout: a value
+                    // per frame.
+                    if animated
+                        && property.kind != Kind::Compound
+                        && property.sample_count == sample_count
+                    {
+                        let mut values = vec![attribute.clone()];
+                        for index in 1..sample_count {
+                            let at = self.geom_param(
+                                property,
+                                &name,
+                                vertex_count,
+                                part.counts.len(),
+                                index,
+                            )?;
+                            match at {
+                                Some(a) if a.scope == attribute.scope => values.push(a),
+                                _ => break,
+                            }
+                        }
+                        let complete = values.len() == sample_count as usize;
+                        if complete && values.iter().any(|v| v.values != attribute.values) {
+                            part.frame_attributes.push(values);
+                        }
+                    }
                     part.attributes.push(attribute);
                 }
             }
@@ -518,6 +547,7 @@ impl SceneReader<'_, '_> {
         name: &str,
         vertex_count: usize,
         curve_count: usize,
+        index: u32,
     ) -> Result<Option<Attribute>, Fault> {
         let (values_property, indices) = match property.kind {
             Kind::Compound => match property.child(".vals") {
@@ -562,7 +592,7 @@ impl SceneReader<'_, '_> {
             ));
             return Ok(None);
         }
-        let mut values = self.sample_values(values_property, 0)?;
+        let mut values = self.sample_values(values_property, index)?;
         if let Some(indices) = indices {
             let groups = values.len() / extent;
             let mut expanded = Vec::with_capacity(indices.len().saturating_mul(extent));
@@ -582,6 +612,12 @@ impl SceneReader<'_, '_> {
         }
         let count = values.len() / extent;
         let declared = property.metadata.get("geoScope").unwrap_or_default();
+        // Groom-level values (such as Unreal's groom_version_major) have no
+        // place in a groom's per-strand or per-vertex attributes, also when
+        // the groom has one strand or one point.
+        if declared == "con" && count == 1 && name != "width" {
+            return Ok(None);
+        }
         let scope = if count == vertex_count
             && (count != curve_count || declared == "vtx" || declared == "var")
         {
@@ -696,7 +732,11 @@ fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
                 .unwrap_or_default();
             points.extend_from_slice(sample);
         }
-        groom.frames.push(Frame { time, points });
+        groom.frames.push(Frame {
+            time,
+            points,
+            attributes: Vec::new(),
+        });
     }
     for attribute in &first.attributes {
         let mut merged = attribute.clone();
@@ -717,7 +757,82 @@ fn merge(parts: Vec<Part>, budget: &mut Budget) -> Result<Groom, Fault> {
         }
         groom.set_attribute(merged);
     }
+    frame_attributes(&parts, &mut groom);
+    one_attribute_per_meaning(&mut groom);
     Ok(groom)
+}
+
+/// Each frame's values of the attributes some object samples per frame
+/// (objects that hold one still give it to every frame), for the
+/// attributes the groom kept (those every object has).
+fn frame_attributes(parts: &[Part], groom: &mut Groom) {
+    let mut names: Vec<&str> = Vec::new();
+    for part in parts {
+        for values in &part.frame_attributes {
+            if let Some(first) = values.first() {
+                if !names.contains(&first.name.as_str()) {
+                    names.push(&first.name);
+                }
+            }
+        }
+    }
+    names.retain(|name| groom.attribute(name).is_some());
+    for (index, frame) in groom.frames.iter_mut().enumerate() {
+        for &name in &names {
+            let Some(kept) = groom.attributes.iter().find(|a| a.name == name) else {
+                continue;
+            };
+            let mut merged = Attribute {
+                name: name.to_string(),
+                scope: kept.scope,
+                values: match kept.values {
+                    AttributeValues::Float(_) => AttributeValues::Float(Vec::new()),
+                    AttributeValues::Vec2(_) => AttributeValues::Vec2(Vec::new()),
+                    AttributeValues::Vec3(_) => AttributeValues::Vec3(Vec::new()),
+                    AttributeValues::Int(_) => AttributeValues::Int(Vec::new()),
+                },
+            };
+            for part in parts {
+                let sampled = part
+                    .frame_attributes
+                    .iter()
+                    .find(|v| v.first().is_some_and(|a| a.name == name))
+                    .and_then(|v| v.get(index).or_else(|| v.last()));
+                let value = sampled.or_else(|| part.attributes.iter().find(|a| a.name == name));
+                if let Some(value) = value {
+                    append(&mut merged.values, &value.values);
+                }
+            }
+            frame.attributes.push(merged);
+        }
+    }
+}
+
+/// Unreal's `groom_width` and `groom_root_uv` say what the schema's `width`
+/// and `uv` say: a groom keeps one attribute per meaning (the schema's when
+/// both are present), so a re-read and re-written file does not gain a copy.
+///
+/// `groom_guide` and `groom_group_id` of all zeros are Unreal's defaults (no
+/// guides, one group), what a groom without them means: not kept either.
+fn one_attribute_per_meaning(groom: &mut Groom) {
+    for name in ["groom_guide", "groom_group_id"] {
+        let zeros = groom.attribute(name).is_some_and(|a| match &a.values {
+            AttributeValues::Int(v) => v.iter().all(|&x| x == 0),
+            AttributeValues::Float(v) => v.iter().all(|&x| x == 0.0),
+            _ => false,
+        });
+        if zeros {
+            groom.remove_attribute(name);
+        }
+    }
+    for (unreal, own) in [("groom_width", "width"), ("groom_root_uv", "root_uv")] {
+        if let Some(mut attribute) = groom.remove_attribute(unreal) {
+            if groom.attribute(own).is_none() {
+                attribute.name = own.to_string();
+                groom.set_attribute(attribute);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -164,6 +164,7 @@ impl Document<'_> {
             frames.push(Frame {
                 time: time as f64,
                 points,
+                attributes: Vec::new(),
             });
         }
         Ok(frames)

@@ -9,6 +9,8 @@
 
 mod compose;
 mod crate_reader;
+mod frame_primvars;
+mod primvars;
 mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
@@ -27,6 +29,7 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     let mut groom = to_groom(path, &stage)?;
+    frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
 }
@@ -44,6 +47,7 @@ pub fn read_sequence_bytes(path: &Path, bytes: &[u8]) -> Result<Vec<Groom>, Impo
     let stage = compose::compose(path, parse_layer(path, bytes)?)?;
     if !topology_is_sampled(&stage) {
         let mut groom = to_groom(path, &stage)?;
+        frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
         groom.provenance.format = "usd".into();
         return Ok(vec![groom]);
     }
@@ -108,6 +112,7 @@ fn topology_sequence(path: &Path, stage: &Stage) -> Result<Vec<Groom>, ImportErr
         let frame = Frame {
             time: code / codes_per_second,
             points: std::mem::take(&mut groom.points),
+            attributes: Vec::new(),
         };
         match grooms.last_mut() {
             Some(run) if run.strand_vertex_counts == groom.strand_vertex_counts => {
@@ -626,6 +631,8 @@ struct CurveSet {
     /// The USD type each attribute was declared with (`color3f[]`, ...).
     declared_types: Vec<(String, String)>,
     notes: Vec<String>,
+    /// Primvars that could not be kept, with why (warnings).
+    losses: Vec<String>,
 }
 
 fn to_points(values: &[f64], matrix: &Matrix) -> Vec<[f32; 3]> {
@@ -633,6 +640,32 @@ fn to_points(values: &[f64], matrix: &Matrix) -> Vec<[f32; 3]> {
         .chunks_exact(3)
         .map(|p| transform_point(matrix, [p[0], p[1], p[2]]).map(|c| c as f32))
         .collect()
+}
+
+/// Refuses a prim whose `curveVertexCounts` change over time: a groom holds
+/// one topology (the whole file is refused, with where it changes, since a
+/// bake cannot skip part of the hair; `read_sequence` carries the change).
+fn check_one_topology(file: &Path, prim: &Prim) -> Result<(), ImportError> {
+    let Some(counts_attribute) = prim.attribute("curveVertexCounts") else {
+        return Ok(());
+    };
+    if let Some(first) = counts_attribute.static_value() {
+        let changed = counts_attribute
+            .samples
+            .iter()
+            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
+        if let Some((code, _)) = changed {
+            return Err(ImportError::malformed(
+                file,
+                counts_attribute.place.clone(),
+                format!(
+                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
+                     a bake needs one topology (inspect and convert carry the change)"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, ImportError> {
@@ -647,22 +680,6 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
             prim.path
         ))
     })?;
-    // Time-varying topology: a groom holds one (refused with where it changes).
-    if let Some(first) = counts_attribute.static_value() {
-        let changed = counts_attribute
-            .samples
-            .iter()
-            .find(|(_, value)| !matches!(value, Value::Blocked) && value != first);
-        if let Some((code, _)) = changed {
-            return Err(at(
-                counts_attribute,
-                format!(
-                    "topology changes at time {code} (curveVertexCounts are time-sampled); \
-                     a bake needs one topology (inspect and convert carry the change)"
-                ),
-            ));
-        }
-    }
     let counts_values = counts_attribute
         .static_value()
         .and_then(|v| v.numbers(1))
@@ -771,7 +788,22 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         attributes: Vec::new(),
         declared_types: Vec::new(),
         notes: Vec::new(),
+        losses: Vec::new(),
     };
+    // Curve normals (ribbons) have no place in a groom: say they are left.
+    if prim.attribute("normals").is_some_and(|a| {
+        a.static_value()
+            .is_some_and(|v| !matches!(v, Value::Blocked))
+    }) {
+        set.losses
+            .push("skipped normals: a groom holds tubes, not oriented ribbons".into());
+    }
+    // By name once: a lookup per primvar was quadratic in their count.
+    let by_name: std::collections::HashMap<&str, &UsdAttribute> = prim
+        .attributes
+        .iter()
+        .map(|a| (a.name.as_str(), a))
+        .collect();
     for attribute in &prim.attributes {
         let name = if attribute.name == "widths" {
             "width".to_string()
@@ -787,139 +819,21 @@ fn curve_set(file: &Path, prim: &Prim, world: &Matrix) -> Result<CurveSet, Impor
         } else {
             continue;
         };
-        let indices = prim
-            .attribute(&format!("{}:indices", attribute.name))
+        let indices = by_name
+            .get(format!("{}:indices", attribute.name).as_str())
             .and_then(|a| a.static_value())
             .and_then(|v| v.numbers(1));
-        match primvar(file, attribute, &name, indices, &set)? {
+        match primvars::primvar(file, attribute, &name, indices, &set)? {
             Ok(converted) => {
                 set.declared_types
                     .push((name.clone(), attribute.type_name.clone()));
                 set.attributes.push(converted)
             }
-            Err(note) => set.notes.push(note),
+            Err(loss) if loss.is_empty() => {}
+            Err(loss) => set.losses.push(loss),
         }
     }
     Ok(set)
-}
-
-/// Converts a primvar (or `widths`) to a groom attribute; `Ok(Err(note))`
-/// for primvars a groom cannot hold, which are skipped with a note.
-fn primvar(
-    file: &Path,
-    attribute: &UsdAttribute,
-    name: &str,
-    indices: Option<&[f64]>,
-    set: &CurveSet,
-) -> Result<Result<Attribute, String>, ImportError> {
-    let skip = |why: &str| Ok(Err(format!("skipped {}: {why}", attribute.name)));
-    let Some(value) = attribute.static_value() else {
-        return skip("no value");
-    };
-    if let Some(size) = attribute.element_size.filter(|&s| s != 1.0) {
-        return skip(&format!("elementSize {size}"));
-    }
-    let base_type = attribute.type_name.trim_end_matches("[]");
-    let (components, data) = match value {
-        Value::Numbers {
-            components,
-            array: true,
-            data,
-        } => (*components, data),
-        _ => return skip("not a numeric array"),
-    };
-    if components == 0 || components > 3 {
-        return skip("more than 3 components");
-    }
-    let mut data: Vec<f64> = data.clone();
-    if let Some(indices) = indices {
-        let element_count = data.len() / components;
-        let mut expanded = Vec::with_capacity(indices.len().saturating_mul(components));
-        for &index in indices {
-            if !(index >= 0.0 && (index as usize) < element_count) {
-                return Err(ImportError::malformed(
-                    file,
-                    attribute.place.clone(),
-                    format!("index {index} is out of range of {element_count} values"),
-                ));
-            }
-            let start = index as usize * components;
-            expanded.extend_from_slice(data.get(start..start + components).unwrap_or(&[]));
-        }
-        data = expanded;
-    }
-    let elements = data.len() / components;
-    let vertices = set.points.len();
-    let strands = set.counts.len();
-    let interpolation = attribute.interpolation.as_deref().unwrap_or(
-        // Fallbacks: widths are per vertex, primvars constant.
-        if attribute.name == "widths" {
-            "vertex"
-        } else {
-            "constant"
-        },
-    );
-    // One value on a vertex, varying or uniform primvar is read as constant,
-    // as usd-core's renderers do (Blender writes widths so).
-    let interpolation = if elements == 1 && (vertices != 1 || strands != 1) {
-        "constant"
-    } else {
-        interpolation
-    };
-    let (scope, expected) = match interpolation {
-        "vertex" => (Scope::Vertex, vertices),
-        "varying" if elements == vertices => (Scope::Vertex, vertices),
-        "uniform" => (Scope::Strand, strands),
-        "constant" => (Scope::Strand, 1),
-        "varying" => return skip("varying interpolation of cubic curves"),
-        other => return skip(&format!("{other} interpolation")),
-    };
-    if elements != expected {
-        return Err(ImportError::malformed(
-            file,
-            attribute.place.clone(),
-            format!(
-                "{} has {elements} values but {interpolation} interpolation needs {expected}",
-                attribute.name
-            ),
-        ));
-    }
-    if interpolation == "constant" {
-        let one = data.clone();
-        data = (0..strands).flat_map(|_| one.iter().copied()).collect();
-    }
-    let integral = matches!(
-        base_type,
-        "int" | "uint" | "int64" | "uint64" | "bool" | "uchar"
-    );
-    let values = match components {
-        1 if integral => {
-            let mut ints = Vec::with_capacity(data.len());
-            for &x in &data {
-                if x < f64::from(i32::MIN) || x > f64::from(i32::MAX) {
-                    return skip("integers beyond 32 bits");
-                }
-                ints.push(x as i32);
-            }
-            AttributeValues::Int(ints)
-        }
-        1 => AttributeValues::Float(data.iter().map(|&x| x as f32).collect()),
-        2 => AttributeValues::Vec2(
-            data.chunks_exact(2)
-                .map(|c| [c[0] as f32, c[1] as f32])
-                .collect(),
-        ),
-        _ => AttributeValues::Vec3(
-            data.chunks_exact(3)
-                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
-                .collect(),
-        ),
-    };
-    Ok(Ok(Attribute {
-        name: name.to_string(),
-        scope,
-        values,
-    }))
 }
 
 /// Index of a basis in the per-strand `curve_basis` attribute of grooms
@@ -1005,6 +919,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     let mut worlds: Vec<Matrix> = Vec::with_capacity(stage.prims.len());
     let mut active: Vec<bool> = Vec::with_capacity(stage.prims.len());
     let mut sets: Vec<(String, CurveSet)> = Vec::new();
+    let mut skipped: Vec<(String, ImportError)> = Vec::new();
     for (index, prim) in stage.prims.iter().enumerate() {
         let parent = prim.parent.filter(|&p| p < index);
         let (parent_world, parent_active) = match parent {
@@ -1028,15 +943,37 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         worlds.push(world);
         active.push(is_active);
         if is_active && prim.type_name == "BasisCurves" {
-            sets.push((prim.path.clone(), curve_set(file, prim, &world)?));
+            // A prim that cannot be read is left out, with a warning naming
+            // it, as usd-core reads the others; the file is refused only
+            // when no curves are left.
+            if prim.attribute("points").is_some() {
+                check_one_topology(file, prim)?;
+            }
+            match curve_set(file, prim, &world) {
+                Ok(set) => sets.push((prim.path.clone(), set)),
+                Err(error) => skipped.push((prim.path.clone(), error)),
+            }
         }
     }
     if sets.is_empty() {
+        if let Some((_, error)) = skipped.into_iter().next() {
+            return Err(error);
+        }
         return Err(ImportError::malformed(
             file,
             Place::File,
             "no BasisCurves prim defined in the file",
         ));
+    }
+    for (path, error) in &skipped {
+        let why = match error {
+            ImportError::Malformed { message, .. } => message.clone(),
+            other => other.to_string(),
+        };
+        groom
+            .provenance
+            .losses
+            .push(format!("skipped curves prim {path}: {why}"));
     }
 
     // Frames: every animated prim must be sampled at the same time codes;
@@ -1061,6 +998,7 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             .map(|&code| Frame {
                 time: code / codes_per_second,
                 points: Vec::new(),
+                attributes: Vec::new(),
             })
             .collect();
     }
@@ -1120,12 +1058,20 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         let vertices_before = groom.points.len();
         let strands_before = groom.strand_vertex_counts.len();
         let earlier_counts = groom.strand_vertex_counts.clone();
+        // The groom's attributes by name (a search each was quadratic).
+        let mut index: std::collections::HashMap<String, usize> = groom
+            .attributes
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (a.name.clone(), i))
+            .collect();
         for attribute in set.attributes {
             let before = match attribute.scope {
                 Scope::Vertex => vertices_before,
                 Scope::Strand => strands_before,
             };
-            match groom.attribute_mut(&attribute.name) {
+            let known = index.get(&attribute.name).copied();
+            match known.and_then(|i| groom.attributes.get_mut(i)) {
                 Some(existing) => {
                     // Interpolation is per prim: where prims differ, the
                     // groom holds the attribute per vertex.
@@ -1152,8 +1098,15 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                     }
                 }
                 None => {
+                    if strands_before > 0 {
+                        groom.provenance.losses.push(format!(
+                            "the curves before {path} have no {}: 0 for their {strands_before} strands",
+                            usd_name(&attribute.name)
+                        ));
+                    }
                     let mut values = empty_like(&attribute.values, before);
                     append(&mut values, &attribute.values);
+                    index.insert(attribute.name.clone(), groom.attributes.len());
                     groom.attributes.push(Attribute {
                         values,
                         ..attribute
@@ -1173,7 +1126,11 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         groom.strand_vertex_counts.extend_from_slice(&set.counts);
         groom.points.extend_from_slice(&set.points);
         notes.extend(set.notes.into_iter().map(|n| format!("{path}: {n}")));
-        // Attributes this prim lacks are zero for its strands.
+        groom
+            .provenance
+            .losses
+            .extend(set.losses.into_iter().map(|loss| format!("{path}: {loss}")));
+        // Attributes this prim lacks are zero for its strands: say so.
         let (vertices, strands) = (groom.points.len(), groom.strand_vertex_counts.len());
         for attribute in &mut groom.attributes {
             let target = match attribute.scope {
@@ -1184,6 +1141,11 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             if missing > 0 {
                 let zeros = empty_like(&attribute.values, missing);
                 append(&mut attribute.values, &zeros);
+                groom.provenance.losses.push(format!(
+                    "{path} has no {}: 0 for its {} strands",
+                    usd_name(&attribute.name),
+                    set.counts.len()
+                ));
             }
         }
     }
@@ -1198,7 +1160,9 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 .zip(&group_ids)
                 .all(|(&guide, &group)| guide == (group == 0))
         });
-    if several && !guides_then_render {
+    // Synthesised only where the file has none: a group_id primvar (as
+    // groombake writes it) is the source's own and is kept.
+    if several && !guides_then_render && groom.attribute("group_id").is_none() {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
             AttributeValues::Int(group_ids),
@@ -1226,6 +1190,15 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     }
     groom.provenance.info = notes.join("; ");
     Ok(groom)
+}
+
+/// The USD name of a groom attribute, for messages.
+fn usd_name(attribute: &str) -> String {
+    match attribute {
+        "width" => "widths".into(),
+        "root_uv" => "primvars:st".into(),
+        other => format!("primvars:{other}"),
+    }
 }
 
 /// Index of a wrap in the per-strand `curve_wrap` attribute of grooms that

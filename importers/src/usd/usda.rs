@@ -18,6 +18,7 @@ pub(super) fn read(path: &Path, bytes: &[u8]) -> Result<Stage, ImportError> {
         lexer: Lexer::new(path, bytes),
         peeked: None,
         stage: Stage::default(),
+        attribute_index: std::collections::HashMap::new(),
     };
     parser.lexer.skip_header()?;
     parser.layer()?;
@@ -291,6 +292,9 @@ struct Parser<'a> {
     lexer: Lexer<'a>,
     peeked: Option<(Token<'a>, Position)>,
     stage: Stage,
+    /// (prim, attribute name) -> index in the prim's attributes: a prim of
+    /// 100,000 primvars is read in linear time, not by a search per line.
+    attribute_index: std::collections::HashMap<(usize, String), usize>,
 }
 
 impl<'a> Parser<'a> {
@@ -826,11 +830,16 @@ impl<'a> Parser<'a> {
                 }
             }
         }
+        let prim_index = prim;
         let Some(prim) = self.stage.prims.get_mut(prim) else {
             return Ok(());
         };
         // `name.timeSamples` and `name` (with metadata) are one attribute.
-        if let Some(existing) = prim.attributes.iter_mut().find(|a| a.name == name) {
+        let known = self
+            .attribute_index
+            .get(&(prim_index, name.to_string()))
+            .copied();
+        if let Some(existing) = known.and_then(|i| prim.attributes.get_mut(i)) {
             if default.is_some() {
                 existing.default = default;
             }
@@ -845,6 +854,8 @@ impl<'a> Parser<'a> {
             }
             return Ok(());
         }
+        self.attribute_index
+            .insert((prim_index, name.to_string()), prim.attributes.len());
         prim.attributes.push(UsdAttribute {
             name: name.to_string(),
             type_name: if array {

@@ -75,56 +75,94 @@ fn is_closed(indices: &[[u32; 3]]) -> bool {
 }
 
 impl MeshSdf {
-    /// `None` for a mesh the grid cannot describe (empty, not finite).
-    pub(crate) fn new(source: &TriMesh) -> Option<MeshSdf> {
+    /// `Ok(None)` for a mesh the grid cannot describe (empty, not
+    /// finite); an error when the grid would be larger than the
+    /// [`crate::budget`] allows (checked before anything is allocated).
+    pub(crate) fn new(source: &TriMesh) -> Result<Option<MeshSdf>, String> {
         let indices = source.indices().to_vec();
         let flags = if is_closed(&indices) {
             TriMeshFlags::ORIENTED
         } else {
             TriMeshFlags::empty()
         };
-        let mesh = TriMesh::with_flags(source.vertices().to_vec(), indices, flags).ok()?;
+        let Ok(mesh) = TriMesh::with_flags(source.vertices().to_vec(), indices, flags) else {
+            return Ok(None);
+        };
         let aabb = mesh.local_aabb();
         let (mins, maxs) = (aabb.mins, aabb.maxs);
         let extent = (maxs - mins).max_element();
         if !(extent.is_finite() && extent > 0.0) {
-            return None;
+            return Ok(None);
         }
         let mut cell = extent / CELLS_ALONG;
+        if !cell.is_normal() {
+            return Ok(None);
+        }
         // Triangles are listed in the cells within `band` of them: a cell
         // whose bound is at most `max_radius` holds only points within
         // `max_radius + 2 half_diagonal = band` of the surface, so its list
         // holds their closest triangle.
         let band_of = |cell: f32| cell * (3f32.sqrt() + 0.5);
-        let dims_for = |cell: f32| -> [usize; 3] {
-            let margin = band_of(cell) + cell;
-            [0, 1, 2].map(|c| ((maxs[c] - mins[c] + 2.0 * margin) / cell).ceil() as usize + 1)
+        // In f64: a finite f32 extent near f32::MAX plus the margins is
+        // not finite in f32, and a saturated cast would size the grid from
+        // garbage.
+        let dims_for = |cell: f32| -> [f64; 3] {
+            let margin = f64::from(band_of(cell)) + f64::from(cell);
+            [0, 1, 2].map(|c| {
+                ((f64::from(maxs[c]) - f64::from(mins[c]) + 2.0 * margin) / f64::from(cell)).ceil()
+                    + 1.0
+            })
         };
-        let mut dims = dims_for(cell);
-        while dims.iter().product::<usize>() > MAX_CELLS {
+        let mut dims_f = dims_for(cell);
+        while dims_f.iter().product::<f64>() > MAX_CELLS as f64 && cell.is_finite() {
             cell *= 1.25;
-            dims = dims_for(cell);
+            dims_f = dims_for(cell);
         }
         let band = band_of(cell);
         let margin = band + cell;
-        let origin = [mins.x - margin, mins.y - margin, mins.z - margin];
+        let origin = [0, 1, 2].map(|c| (f64::from(mins[c]) - f64::from(margin)) as f32);
+        let sized = dims_f.iter().product::<f64>() <= MAX_CELLS as f64;
+        if !(sized && cell.is_finite() && band.is_finite() && origin.iter().all(|o| o.is_finite()))
+        {
+            return Ok(None);
+        }
+        // At most MAX_CELLS each, so exact in usize.
+        let dims = dims_f.map(|d| d as usize);
         let inv_cell = 1.0 / cell;
         let half_diagonal = cell * 3f32.sqrt() * 0.5;
         let index = |x: usize, y: usize, z: usize| (x * dims[1] + y) * dims[2] + z;
 
         // Every (cell, triangle) pair whose triangle box, grown by the
         // band, overlaps the cell; then only those within reach of the
-        // cell's points.
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        for (t, triangle) in mesh.triangles().enumerate() {
-            let lo = [0, 1, 2].map(|c| {
-                let m = triangle.a[c].min(triangle.b[c]).min(triangle.c[c]) - band;
+        // cell's points. Counted first: a few large triangles over a fine
+        // grid can ask for more pairs than memory holds.
+        let span = |triangle: &parry3d::shape::Triangle| {
+            let at = |m: f32, c: usize| {
                 (((m - origin[c]) * inv_cell).floor().max(0.0) as usize).min(dims[c] - 1)
+            };
+            let lo = [0, 1, 2].map(|c| {
+                at(
+                    triangle.a[c].min(triangle.b[c]).min(triangle.c[c]) - band,
+                    c,
+                )
             });
             let hi = [0, 1, 2].map(|c| {
-                let m = triangle.a[c].max(triangle.b[c]).max(triangle.c[c]) + band;
-                (((m - origin[c]) * inv_cell).floor().max(0.0) as usize).min(dims[c] - 1)
+                at(
+                    triangle.a[c].max(triangle.b[c]).max(triangle.c[c]) + band,
+                    c,
+                )
             });
+            (lo, hi)
+        };
+        let entries = mesh.triangles().fold(0u64, |sum, triangle| {
+            let (lo, hi) = span(&triangle);
+            let count = (0..3).fold(1u64, |n, c| n.saturating_mul((hi[c] - lo[c] + 1) as u64));
+            sum.saturating_add(count)
+        });
+        crate::budget::check_grid_entries(entries, mesh.indices().len() as u64)?;
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(entries as usize);
+        for (t, triangle) in mesh.triangles().enumerate() {
+            let (lo, hi) = span(&triangle);
             for x in lo[0]..=hi[0] {
                 for y in lo[1]..=hi[1] {
                     for z in lo[2]..=hi[2] {
@@ -210,7 +248,7 @@ impl MeshSdf {
                 sdf.clear[i / 64] |= 1 << (i % 64);
             }
         }
-        Some(sdf)
+        Ok(Some(sdf))
     }
 
     /// Cells of no triangle that the border cannot reach through other
@@ -367,7 +405,7 @@ mod tests {
     #[test]
     fn the_grid_agrees_with_parrys_exact_distance() {
         let mesh = head();
-        let sdf = MeshSdf::new(&mesh).expect("grid");
+        let sdf = MeshSdf::new(&mesh).expect("within budget").expect("grid");
         let radius = 4e-5;
         assert!(radius <= sdf.max_radius);
         let mut seed = 7u32;
@@ -412,5 +450,22 @@ mod tests {
             near > 1000 && inside > 300 && clear > 1000,
             "{near} {inside} {clear}"
         );
+    }
+
+    /// A vertex at a huge but finite coordinate (3.2e38) once sized the
+    /// grid from an overflowed product and listed cells without bound;
+    /// the grid stays within its cell budget (a coarse, valid grid).
+    #[test]
+    fn a_vertex_near_f32_max_gives_a_bounded_grid() {
+        let (mut vertices, triangles) = crate::sim::colliders::sample_head();
+        vertices[0].y = 3.2e38;
+        let mesh = TriMesh::new(vertices, triangles).expect("mesh");
+        let sdf = MeshSdf::new(&mesh).expect("within budget").expect("grid");
+        assert!(
+            sdf.dims.iter().product::<usize>() <= MAX_CELLS,
+            "{:?}",
+            sdf.dims
+        );
+        assert!(sdf.cell.is_finite() && sdf.origin.iter().all(|o| o.is_finite()));
     }
 }

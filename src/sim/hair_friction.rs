@@ -1,0 +1,709 @@
+//! Coulomb friction between hairs (issue 33, item 1; METHOD I), the
+//! physical model's pairwise hair-hair contact.
+//!
+//! At the start of a step every edge of an active strand finds the edges
+//! of other strands that pass within `reach` of it (two hair radii plus a
+//! margin for the step's motion) through a uniform grid of cells, and
+//! keeps one contact per pair: where on its own edge the two segments come
+//! closest (`s`), the other fibre's closest point and velocity, and the
+//! normal between them, all from the start of the step.
+//!
+//! Inside the strand's constraint solve the other fibre is a kinematic
+//! target (Jacobi between strands: it moves on with its velocity at the
+//! start of the step), exactly as a moving collider is:
+//! - after each Newton iteration, [`project`] pushes the contact point
+//!   (`(1 - s) p_e + s p_{e+1}`) back to two radii from the target along
+//!   the contact normal (an inequality: never pulled in), spreading the
+//!   push over the edge's two vertices, and marks them as touching for the
+//!   next solve (`contact_normals`, as a collider contact does);
+//! - after the last iteration, [`friction`] applies Coulomb's law at each
+//!   touching vertex (the vertices nearest each contact point) to its
+//!   motion over the step relative to the other fibre's: its tangential
+//!   part is cancelled while it is at most `mu` times the normal push the
+//!   contacts gave (static: the fibres stick), else reduced by that much
+//!   (kinetic). This is the colliders' position-level friction
+//!   (`Work::friction` in step.rs), which holds a strand on a slope within
+//!   1 % of Coulomb's rates; a contact then gets one more solve, after
+//!   which [`restick`] puts the stuck vertices back where they stuck.
+//!
+//! Each strand reads only the other strands' state at the start of the
+//! step and its own contacts in a fixed order, so the result is the same
+//! for any thread count and group. Buffers are kept from step to step.
+
+use super::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
+
+/// One contact of an edge of a strand with an edge of another strand.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct HairContact {
+    /// The strand's edge (vertices `edge` and `edge + 1` of the strand).
+    pub edge: u32,
+    /// Where on that edge, `0..=1` from vertex `edge`.
+    pub s: f32,
+    /// The other fibre's closest point at the start of the step, m.
+    pub other: V3,
+    /// Its velocity at the start of the step, m/s.
+    pub other_velocity: V3,
+    /// Unit normal from the other fibre toward this strand.
+    pub normal: V3,
+}
+
+/// Strands whose contacts one task finds (fixed, so the buffers and their
+/// order do not depend on the thread count).
+const CHUNK_STRANDS: usize = 32;
+/// Edges per task when the grid is filled.
+const CHUNK_EDGES: usize = 4096;
+/// Cells an edge's box may cover; an edge torn longer finds no contacts
+/// (the hair-hair penalty still pushes it).
+const MAX_CELLS_PER_EDGE: i64 = 64;
+
+/// The contacts of every active strand's edges with other strands' edges,
+/// found by [`HairContacts::build`] at the start of a step.
+#[derive(Debug, Default)]
+pub struct HairContacts {
+    /// Centre distance a contact keeps: two hair radii, m.
+    distance: f32,
+    /// Coulomb's coefficient between hairs.
+    mu: f32,
+    inv_cell: f32,
+    /// The strand of each vertex of an active strand, `u32::MAX` otherwise.
+    owner: Vec<u32>,
+    /// Per chunk of edges, (cell key, first vertex of the edge).
+    key_chunks: Vec<Vec<(u64, u32)>>,
+    /// All of them, sorted by key then edge.
+    keys: Vec<(u64, u32)>,
+    /// Per chunk of strands: their contacts in strand then edge order, and
+    /// each strand's range of them.
+    chunks: Vec<Chunk>,
+    /// Per strand, its contacts: (chunk, start, end) in `chunks`.
+    ranges: Vec<(u32, u32, u32)>,
+}
+
+#[derive(Debug, Default)]
+struct Chunk {
+    contacts: Vec<HairContact>,
+    ranges: Vec<(u32, u32)>,
+}
+
+/// The cell of a point, clamped so that far-off points cannot overflow.
+#[inline]
+fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
+    p.map(|c| (c * inv_cell).floor().clamp(-1.0e6, 1.0e6) as i32)
+}
+
+/// A cell as one sortable key (21 bits per axis).
+#[inline]
+fn pack(c: [i32; 3]) -> u64 {
+    let axis = |v: i32| (v as i64 + (1 << 20)) as u64 & ((1 << 21) - 1);
+    axis(c[0]) << 42 | axis(c[1]) << 21 | axis(c[2])
+}
+
+/// The box of segment `a`-`b` grown by `grow`, as cells; `None` when it
+/// covers too many.
+#[inline]
+fn cell_box(a: V3, b: V3, grow: f32, inv_cell: f32) -> Option<([i32; 3], [i32; 3])> {
+    let lo = cell_of(std::array::from_fn(|k| a[k].min(b[k]) - grow), inv_cell);
+    let hi = cell_of(std::array::from_fn(|k| a[k].max(b[k]) + grow), inv_cell);
+    let count: i64 = (0..3).map(|k| i64::from(hi[k] - lo[k]) + 1).product();
+    (count <= MAX_CELLS_PER_EDGE).then_some((lo, hi))
+}
+
+/// The closest points of segments `p1`-`q1` and `p2`-`q2`: the parameters
+/// `(s, t)` along each (Ericson, Real-Time Collision Detection, 5.1.9).
+fn closest_parameters(p1: V3, q1: V3, p2: V3, q2: V3) -> (f32, f32) {
+    let d1 = sub(q1, p1);
+    let d2 = sub(q2, p2);
+    let r = sub(p1, p2);
+    let a = dot(d1, d1);
+    let e = dot(d2, d2);
+    let f = dot(d2, r);
+    let tiny = 1e-20;
+    if a <= tiny && e <= tiny {
+        return (0.0, 0.0);
+    }
+    if a <= tiny {
+        return (0.0, (f / e).clamp(0.0, 1.0));
+    }
+    let c = dot(d1, r);
+    if e <= tiny {
+        return ((-c / a).clamp(0.0, 1.0), 0.0);
+    }
+    let b = dot(d1, d2);
+    let denom = a * e - b * b;
+    let mut s = if denom > tiny * a * e {
+        ((b * f - c * e) / denom).clamp(0.0, 1.0)
+    } else {
+        // Parallel: any point; the middle of the overlap is found below.
+        0.5
+    };
+    let mut t = (b * s + f) / e;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-c / a).clamp(0.0, 1.0);
+    } else if t > 1.0 {
+        t = 1.0;
+        s = ((b - c) / a).clamp(0.0, 1.0);
+    }
+    (s, t)
+}
+
+/// Whether the closest points `s` on edge `v` (from `a`) and `t` on edge
+/// `f` (from `c`) are the contact of their features: a contact at a
+/// vertex two edges share is kept once, by the edge that starts there,
+/// and only when the other point does not lie across the previous edge
+/// (which then has the contact inside it). Without this a fibre sliding
+/// along another met a second, tilted contact at each of its vertices (a
+/// bump every edge), and friction counted a shared vertex twice.
+#[inline]
+fn closest_feature(
+    edge_of: &impl Fn(usize) -> Option<(u32, V3, V3)>,
+    v: usize,
+    f: usize,
+    s: f32,
+    t: f32,
+    a: V3,
+    c: V3,
+) -> bool {
+    // The next edge finds the vertex at its start.
+    if (s == 1.0 && edge_of(v + 1).is_some()) || (t == 1.0 && edge_of(f + 1).is_some()) {
+        return false;
+    }
+    // At an edge's start, the point across from it must not lie along the
+    // previous edge (that edge has the contact inside it).
+    let along_previous = |vertex: usize, start: V3, point: V3| {
+        vertex > 0
+            && edge_of(vertex - 1)
+                .is_some_and(|(_, before, _)| dot(sub(point, start), sub(start, before)) < 0.0)
+    };
+    if s == 0.0 {
+        if let Some((_, c0, d0)) = edge_of(f) {
+            if along_previous(v, a, lerp3(c0, d0, t)) {
+                return false;
+            }
+        }
+    }
+    if t == 0.0 {
+        if let Some((_, a0, b0)) = edge_of(v) {
+            if along_previous(f, c, lerp3(a0, b0, s)) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[inline]
+fn lerp3(a: V3, b: V3, t: f32) -> V3 {
+    add(a, scale(sub(b, a), t))
+}
+
+impl HairContacts {
+    /// Finds the contacts of the `active` strands (`offsets` as in
+    /// StrandSet) at `positions` with `velocities`, for hair radius
+    /// `radius` and Coulomb coefficient `mu`; `rest_longest` is the
+    /// longest rest edge (sizes the cells), `dt` the step.
+    #[allow(clippy::too_many_arguments)]
+    pub fn build(
+        &mut self,
+        positions: &[V3],
+        velocities: &[V3],
+        offsets: &[usize],
+        active: &[bool],
+        radius: f32,
+        mu: f32,
+        rest_longest: f32,
+        dt: f32,
+    ) {
+        use rayon::prelude::*;
+        self.distance = 2.0 * radius;
+        self.mu = mu;
+        self.owner.clear();
+        self.owner.resize(positions.len(), u32::MAX);
+        for (strand, w) in offsets.windows(2).enumerate() {
+            if active[strand] {
+                self.owner[w[0]..w[1]].fill(strand as u32);
+            }
+        }
+        let owner = &self.owner;
+        // The fastest vertex bounds how far two fibres close in a step: the
+        // margin (capped at an edge, so a wild vertex cannot make the search
+        // quadratic).
+        let fastest = velocities
+            .par_iter()
+            .zip(owner.par_iter())
+            .with_min_len(CHUNK_EDGES)
+            .filter(|(v, o)| **o != u32::MAX && is_finite3(**v))
+            .map(|(v, _)| length(*v))
+            .reduce(|| 0.0, f32::max);
+        let longest = if rest_longest.is_finite() && rest_longest > 0.0 {
+            rest_longest
+        } else {
+            self.distance
+        };
+        let reach = 2.0 * self.distance + (2.0 * fastest * dt).min(longest);
+        let cell = longest.max(reach);
+        self.inv_cell = 1.0 / cell;
+        let inv_cell = self.inv_cell;
+        let edge_of = |v: usize| -> Option<(u32, V3, V3)> {
+            let strand = owner[v];
+            if strand == u32::MAX || owner.get(v + 1) != Some(&strand) {
+                return None;
+            }
+            let (a, b) = (positions[v], positions[v + 1]);
+            (is_finite3(a) && is_finite3(b)).then_some((strand, a, b))
+        };
+
+        // The grid: each edge in the cells its box grown by half the reach
+        // touches (two edges within `reach` then share a cell).
+        let edge_chunks = positions.len().div_ceil(CHUNK_EDGES);
+        if self.key_chunks.len() < edge_chunks {
+            self.key_chunks.resize_with(edge_chunks, Vec::new);
+        }
+        self.key_chunks[..edge_chunks]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, out)| {
+                out.clear();
+                for v in k * CHUNK_EDGES..((k + 1) * CHUNK_EDGES).min(positions.len()) {
+                    let Some((_, a, b)) = edge_of(v) else {
+                        continue;
+                    };
+                    let Some((lo, hi)) = cell_box(a, b, 0.5 * reach, inv_cell) else {
+                        continue;
+                    };
+                    for x in lo[0]..=hi[0] {
+                        for y in lo[1]..=hi[1] {
+                            for z in lo[2]..=hi[2] {
+                                out.push((pack([x, y, z]), v as u32));
+                            }
+                        }
+                    }
+                }
+            });
+        self.keys.clear();
+        for chunk in &self.key_chunks[..edge_chunks] {
+            self.keys.extend_from_slice(chunk);
+        }
+        // Unique keys: any sort gives one order.
+        self.keys.par_sort_unstable();
+
+        // Each strand's contacts, in fixed chunks of strands.
+        let strands = offsets.len().saturating_sub(1);
+        let strand_chunks = strands.div_ceil(CHUNK_STRANDS);
+        if self.chunks.len() < strand_chunks {
+            self.chunks.resize_with(strand_chunks, Default::default);
+        }
+        let keys = &self.keys;
+        let distance = self.distance;
+        self.chunks[..strand_chunks]
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(k, chunk)| {
+                let Chunk {
+                    contacts: out,
+                    ranges,
+                } = chunk;
+                out.clear();
+                ranges.clear();
+                for strand in k * CHUNK_STRANDS..((k + 1) * CHUNK_STRANDS).min(strands) {
+                    let begin = out.len() as u32;
+                    if !active[strand] {
+                        ranges.push((begin, begin));
+                        continue;
+                    }
+                    let first = offsets[strand];
+                    for v in first..offsets[strand + 1] {
+                        let Some((own, a, b)) = edge_of(v) else {
+                            continue;
+                        };
+                        let Some((lo, hi)) = cell_box(a, b, 0.5 * reach, inv_cell) else {
+                            continue;
+                        };
+                        for x in lo[0]..=hi[0] {
+                            for y in lo[1]..=hi[1] {
+                                for z in lo[2]..=hi[2] {
+                                    let key = pack([x, y, z]);
+                                    let start = keys.partition_point(|e| e.0 < key);
+                                    for &(_, other) in
+                                        keys[start..].iter().take_while(|e| e.0 == key)
+                                    {
+                                        let f = other as usize;
+                                        if owner[f] == own {
+                                            continue;
+                                        }
+                                        let (c, d) = (positions[f], positions[f + 1]);
+                                        // Boxes apart by more than the reach: no
+                                        // contact (most pairs of a cell).
+                                        if (0..3).any(|k| {
+                                            a[k].min(b[k]) > c[k].max(d[k]) + reach
+                                                || a[k].max(b[k]) + reach < c[k].min(d[k])
+                                        }) {
+                                            continue;
+                                        }
+                                        // Each pair once: in the lowest cell both
+                                        // edges' boxes share.
+                                        let other_low = cell_of(
+                                            std::array::from_fn(|k| c[k].min(d[k]) - 0.5 * reach),
+                                            inv_cell,
+                                        );
+                                        if [x, y, z]
+                                            != std::array::from_fn(|k| lo[k].max(other_low[k]))
+                                        {
+                                            continue;
+                                        }
+                                        let (s, t) = closest_parameters(a, b, c, d);
+                                        if !closest_feature(&edge_of, v, f, s, t, a, c) {
+                                            continue;
+                                        }
+                                        let (on_own, on_other) = (lerp3(a, b, s), lerp3(c, d, t));
+                                        let gap = sub(on_own, on_other);
+                                        let gap_length = length(gap);
+                                        if gap_length.is_nan() || gap_length >= reach {
+                                            continue;
+                                        }
+                                        let normal = if gap_length > 1e-3 * distance {
+                                            scale(gap, 1.0 / gap_length)
+                                        } else {
+                                            // Crossing at their axes: across both.
+                                            let across = cross(sub(b, a), sub(d, c));
+                                            let l = length(across);
+                                            if l.is_nan() || l <= 0.0 {
+                                                continue;
+                                            }
+                                            scale(across, 1.0 / l)
+                                        };
+                                        let other_velocity =
+                                            lerp3(velocities[f], velocities[f + 1], t);
+                                        let own_velocity =
+                                            lerp3(velocities[v], velocities[v + 1], s);
+                                        // Only fibres that may touch in this
+                                        // step: two radii plus twice their
+                                        // closing distance (a margin of the
+                                        // fastest hair's motion made hair that
+                                        // falls together touch everything
+                                        // within millimetres).
+                                        let closing = length(sub(own_velocity, other_velocity));
+                                        if !is_finite3(other_velocity)
+                                            || closing.is_nan()
+                                            || gap_length >= 2.0 * distance + 2.0 * closing * dt
+                                        {
+                                            continue;
+                                        }
+                                        out.push(HairContact {
+                                            edge: (v - first) as u32,
+                                            s,
+                                            other: on_other,
+                                            other_velocity,
+                                            normal,
+                                        });
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    ranges.push((begin, out.len() as u32));
+                }
+            });
+        self.ranges.clear();
+        for (k, chunk) in self.chunks[..strand_chunks].iter().enumerate() {
+            self.ranges
+                .extend(chunk.ranges.iter().map(|&(a, b)| (k as u32, a, b)));
+        }
+    }
+
+    /// The contacts of strand `strand` found by the last build.
+    #[inline]
+    pub(crate) fn of(&self, strand: usize) -> &[HairContact] {
+        match self.ranges.get(strand) {
+            Some(&(chunk, start, end)) => self
+                .chunks
+                .get(chunk as usize)
+                .and_then(|c| c.contacts.get(start as usize..end as usize))
+                .unwrap_or(&[]),
+            None => &[],
+        }
+    }
+
+    /// Coulomb's coefficient of the last build.
+    #[inline]
+    pub(crate) fn mu(&self) -> f32 {
+        self.mu
+    }
+
+    /// The centre distance contacts keep, m.
+    #[inline]
+    pub(crate) fn distance(&self) -> f32 {
+        self.distance
+    }
+}
+
+/// The weights of an edge's two vertices at `s` for a push of the contact
+/// point (only free vertices move), and the push's divisor (the contact
+/// point moves by `(w_a (1 - s) + w_b s)` times the vertices' move).
+#[inline]
+fn spread(s: f32, free_a: f32, free_b: f32) -> Option<(f32, f32, f32)> {
+    let (wa, wb) = ((1.0 - s) * free_a.min(1.0), s * free_b.min(1.0));
+    let divisor = wa * (1.0 - s) + wb * s;
+    (divisor > 1e-6).then_some((wa, wb, divisor))
+}
+
+/// Pushes each contact point of the strand (`p`, free where `free > 0`)
+/// out to `distance` from the other fibre's point where it is at the end of
+/// the step, along the contact normal, and marks the pushed vertices in
+/// `normals` for the solve. The pushes are averaged per vertex (Jacobi):
+/// one after the other, the contacts in the middle of successive edges
+/// of a strand lying across others pushed each shared vertex twice and
+/// threw the strand up by half a radius. `push` is scratch (one per
+/// vertex). Returns whether a vertex moved more than `tolerance`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project(
+    contacts: &[HairContact],
+    push: &mut [VertexContact],
+    p: &mut [V3],
+    free: &[f32],
+    normals: &mut [V3],
+    distance: f32,
+    dt: f32,
+    tolerance: f32,
+) -> bool {
+    let mut any = false;
+    for c in contacts {
+        let (a, b) = (c.edge as usize, c.edge as usize + 1);
+        let Some((wa, wb, divisor)) = spread(c.s, free[a], free[b]) else {
+            continue;
+        };
+        let target = add(c.other, scale(c.other_velocity, dt));
+        let point = lerp3(p[a], p[b], c.s);
+        let gap = dot(sub(point, target), c.normal) - distance;
+        if gap >= 0.0 {
+            continue;
+        }
+        if !any {
+            push.fill(VertexContact::default());
+            any = true;
+        }
+        let out = scale(c.normal, -gap / divisor);
+        for (i, w) in [(a, wa), (b, wb)] {
+            if w > 0.0 {
+                let v = &mut push[i];
+                v.normal = add(v.normal, scale(out, w));
+                v.weight += 1.0;
+                normals[i] = c.normal;
+            }
+        }
+    }
+    let mut moved = false;
+    if any {
+        for (p, v) in p.iter_mut().zip(push.iter()) {
+            if v.weight > 0.0 {
+                let step = scale(v.normal, 1.0 / v.weight);
+                *p = add(*p, step);
+                moved |= length(step) > tolerance;
+            }
+        }
+    }
+    moved
+}
+
+/// A vertex's share of its contacts with other strands: the contact
+/// normals and the other fibres' velocities, weighted by how near the
+/// vertex each contact point is.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct VertexContact {
+    normal: V3,
+    velocity: V3,
+    weight: f32,
+}
+
+/// The smallest share of a contact that makes a vertex touch (the nearer
+/// vertex of a contact point always does).
+const TOUCH_SHARE: f32 = 0.25;
+
+/// Coulomb friction at each touching vertex after the solve, as the
+/// colliders' (`Work::friction` in step.rs): the vertex's motion over the
+/// step relative to the fibres it touches (at `start` when the step began,
+/// `predicted` before any contact), along their contact plane, is
+/// cancelled while it is at most `mu` times the normal push from the
+/// prediction (static), else shortened by that much (kinetic). Per vertex,
+/// so a contact found through two edges that share a vertex (or a fibre
+/// touching two edges of the other at their shared vertex) counts once.
+/// `touch` is scratch (one per vertex); `stuck` (one per vertex) is set
+/// for the vertices that stuck, for [`restick`]. Returns whether a vertex
+/// moved more than `tolerance`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn friction(
+    contacts: &[HairContact],
+    touch: &mut [VertexContact],
+    stuck: &mut [bool],
+    p: &mut [V3],
+    start: &[V3],
+    predicted: &[V3],
+    free: &[f32],
+    mu: f32,
+    dt: f32,
+    tolerance: f32,
+) -> bool {
+    let mut moved = false;
+    stuck.fill(false);
+    if mu <= 0.0 {
+        return false;
+    }
+    gather_touch(contacts, touch, free);
+    for i in 0..p.len() {
+        let t = touch[i];
+        if t.weight <= 0.0 {
+            continue;
+        }
+        let l = length(t.normal);
+        if l.is_nan() || l <= 0.0 {
+            continue;
+        }
+        let normal = scale(t.normal, 1.0 / l);
+        let pushed = dot(sub(p[i], predicted[i]), normal).max(0.0);
+        if pushed <= 0.0 {
+            continue;
+        }
+        let other = scale(t.velocity, dt / t.weight);
+        let relative = sub(sub(p[i], start[i]), other);
+        let tangential = sub(relative, scale(normal, dot(relative, normal)));
+        let slide = length(tangential);
+        if slide == 0.0 {
+            stuck[i] = true;
+            continue;
+        }
+        stuck[i] = slide <= mu * pushed;
+        let held = if stuck[i] { 1.0 } else { mu * pushed / slide };
+        p[i] = sub(p[i], scale(tangential, held));
+        moved |= held * slide > tolerance;
+    }
+    moved
+}
+
+/// Each free vertex's share of the contacts (`touch`, one per vertex).
+fn gather_touch(contacts: &[HairContact], touch: &mut [VertexContact], free: &[f32]) {
+    touch.fill(VertexContact::default());
+    for c in contacts {
+        for (i, share) in [(c.edge as usize, 1.0 - c.s), (c.edge as usize + 1, c.s)] {
+            if share >= TOUCH_SHARE && free[i] > 0.0 {
+                let t = &mut touch[i];
+                t.normal = add(t.normal, scale(c.normal, share));
+                t.velocity = add(t.velocity, scale(c.other_velocity, share));
+                t.weight += share;
+            }
+        }
+    }
+}
+
+/// After the solve that follows [`friction`]: the vertices that stuck are
+/// put back where they stuck (relative to the fibres they touch),
+/// cancelling the little that solve slid them along the contact plane.
+/// The move is a small fraction of the hair radius, so no edge is
+/// strained by it.
+pub(crate) fn restick(
+    touch: &[VertexContact],
+    stuck: &[bool],
+    p: &mut [V3],
+    start: &[V3],
+    dt: f32,
+) {
+    for i in 0..p.len() {
+        let t = touch[i];
+        let l = length(t.normal);
+        if !stuck[i] || t.weight <= 0.0 || l.is_nan() || l <= 0.0 {
+            continue;
+        }
+        let normal = scale(t.normal, 1.0 / l);
+        let other = scale(t.velocity, dt / t.weight);
+        let relative = sub(sub(p[i], start[i]), other);
+        p[i] = sub(p[i], sub(relative, scale(normal, dot(relative, normal))));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crossing_segments_meet_at_their_crossing() {
+        let (s, t) = closest_parameters(
+            [-1.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.5, 1.0, -1.0],
+            [0.5, 1.0, 3.0],
+        );
+        assert!(
+            (s - 0.75).abs() < 1e-6 && (t - 0.25).abs() < 1e-6,
+            "{s} {t}"
+        );
+    }
+
+    #[test]
+    fn a_contact_point_is_pushed_out_and_held_inside_the_cone() {
+        let contact = HairContact {
+            edge: 0,
+            s: 0.25,
+            other: [0.0, 0.0, 0.0],
+            other_velocity: [0.0; 3],
+            normal: [0.0, 1.0, 0.0],
+        };
+        let start = [[-0.25, 0.1, 0.0], [0.75, 0.1, 0.0]];
+        // Fell 0.2 and slid 0.01 sideways: pushed back up to 0.1 and held.
+        let predicted = [[-0.24, -0.1, 0.0], [0.76, -0.1, 0.0]];
+        let mut p = predicted;
+        let mut normals = [[0.0; 3]; 2];
+        let mut touch = [VertexContact::default(); 2];
+        assert!(project(
+            &[contact],
+            &mut touch,
+            &mut p,
+            &[1.0, 1.0],
+            &mut normals,
+            0.1,
+            0.01,
+            0.0
+        ));
+        let point = lerp3(p[0], p[1], 0.25);
+        assert!((point[1] - 0.1).abs() < 1e-6, "{p:?}");
+        assert_eq!(normals, [[0.0, 1.0, 0.0]; 2]);
+        friction(
+            &[contact],
+            &mut touch,
+            &mut [false; 2],
+            &mut p,
+            &start,
+            &predicted,
+            &[1.0, 1.0],
+            0.3,
+            0.01,
+            0.0,
+        );
+        let point = lerp3(p[0], p[1], 0.25);
+        assert!(point[0].abs() < 1e-6, "{p:?}");
+        // Slid 0.1: shortened by mu times the push (0.3 x 0.2).
+        let predicted = [[-0.15, -0.1, 0.0], [0.85, -0.1, 0.0]];
+        let mut p = predicted;
+        project(
+            &[contact],
+            &mut touch,
+            &mut p,
+            &[1.0, 1.0],
+            &mut normals,
+            0.1,
+            0.01,
+            0.0,
+        );
+        friction(
+            &[contact],
+            &mut touch,
+            &mut [false; 2],
+            &mut p,
+            &start,
+            &predicted,
+            &[1.0, 1.0],
+            0.3,
+            0.01,
+            0.0,
+        );
+        let point = lerp3(p[0], p[1], 0.25);
+        assert!((point[0] - 0.04).abs() < 1e-6, "{p:?}");
+    }
+}
