@@ -41,6 +41,31 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
     )
 }
 
+/// How far the blower's air reaches a point, 0..1: the falloff of (19)
+/// (`1 / (d / L + 1)^2`, `d` the distance from the wind's axis), nothing
+/// behind the nozzle or outside its cone, as [`blower_dv`] pushes (without
+/// the angle to the hair: air dries a fibre whatever its direction). The
+/// drying of a `dry` stage reads it (`timeline::drying`).
+pub fn blower_reach(blower: &Blower, position: V3) -> f32 {
+    let wind = sub(blower.to, blower.from);
+    let wind_length = length(wind);
+    if wind_length <= 0.0 {
+        return 0.0;
+    }
+    let w_hat = scale(wind, 1.0 / wind_length);
+    let rel = sub(position, blower.from);
+    let along = dot(rel, w_hat);
+    let d = length(sub(rel, scale(w_hat, along)));
+    let outside_cone = blower
+        .cone_half_angle
+        .is_some_and(|a| d > along * a.to_radians().tan());
+    if along <= 0.0 || outside_cone {
+        return 0.0;
+    }
+    let falloff = d / blower.falloff_length + 1.0;
+    1.0 / (falloff * falloff)
+}
+
 /// [`blower_dv`] of eight vertices, one per lane of AVX registers
 /// (`position` and `edge_direction` by coordinate): per lane the same
 /// operations in the same order, so the same bits; the wind's direction

@@ -99,6 +99,7 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
 }
 
 pub use colliders::{Collider, ColliderSet};
+pub use forces::blower_reach;
 pub use hold::Hold;
 pub use instructions::Instructions;
 pub use parry3d;

@@ -168,35 +168,6 @@ impl DryingAir {
     }
 }
 
-/// How far the blower's air reaches a point, 0..1: the falloff of (19)
-/// (`1 / (d / L + 1)^2`, `d` the distance from the wind's axis), nothing
-/// behind the nozzle or outside its cone, as `sim::forces::blower_dv`
-/// pushes (without the angle to the hair: air dries a fibre whatever its
-/// direction).
-pub fn blower_reach(blower: &Blower, position: [f32; 3]) -> f32 {
-    let sub = |a: [f32; 3], b: [f32; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let length = |a: [f32; 3]| dot(a, a).sqrt();
-    let scale = |a: [f32; 3], k: f32| [a[0] * k, a[1] * k, a[2] * k];
-    let wind = sub(blower.to, blower.from);
-    let wind_length = length(wind);
-    if wind_length <= 0.0 {
-        return 0.0;
-    }
-    let w_hat = scale(wind, 1.0 / wind_length);
-    let rel = sub(position, blower.from);
-    let along = dot(rel, w_hat);
-    let d = length(sub(rel, scale(w_hat, along)));
-    let outside_cone = blower
-        .cone_half_angle
-        .is_some_and(|a| d > along * a.to_radians().tan());
-    if along <= 0.0 || outside_cone {
-        return 0.0;
-    }
-    let falloff = d / blower.falloff_length + 1.0;
-    1.0 / (falloff * falloff)
-}
-
 /// A stage's drying, ready to step: `1 - exp(-dt / tau)` tabled over the
 /// blower's reach (the time constant needs a root-finding; the table keeps
 /// a step's cost to a lookup per vertex).
@@ -239,7 +210,7 @@ impl Drying {
         for (w, &p) in wetness.iter_mut().zip(positions) {
             let loss = match &self.blower {
                 Some(b) => {
-                    let x = f64::from(blower_reach(b, p)) * (REACH_TABLE - 1) as f64;
+                    let x = f64::from(crate::sim::blower_reach(b, p)) * (REACH_TABLE - 1) as f64;
                     let k = (x.floor() as usize).min(REACH_TABLE - 2);
                     let t = x - k as f64;
                     self.loss[k] + t * (self.loss[k + 1] - self.loss[k])
