@@ -751,6 +751,11 @@ fn bake(
             m.steps_done.load(Ordering::Relaxed) as f64 / total as f64
         }
     };
+    // The start, before any poll: a bake shorter than one poll still
+    // reports its start and its end (0.0, then 1.0).
+    if let Some(callback) = &progress {
+        reporter.update(callback, 0.0, 0)?;
+    }
     let outcome = std::thread::scope(|scope| -> PyResult<_> {
         let worker = scope.spawn(|| run_bake(engine_timeline, &options));
         let mut interrupted: Option<PyErr> = None;
@@ -792,9 +797,9 @@ fn bake(
     Ok(PyReport { data })
 }
 
-/// Calls a progress callback: once for every stage as it starts (also a
-/// stage shorter than the 50 ms between polls, with the fraction of the
-/// moment), and whenever the fraction grew.
+/// Calls a progress callback: at the start (0.0), once for every stage as
+/// it starts (also a stage shorter than the 50 ms between polls, with the
+/// fraction of the moment), and whenever the fraction grew.
 struct Progress {
     /// `callback(fraction, stage)`, else `callback(fraction)`.
     with_stage: bool,
