@@ -16,25 +16,14 @@ use super::Blower;
 /// the wind, `d` the distance from the vertex to the wind axis.
 #[inline]
 pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> V3 {
-    let wind = sub(blower.to, blower.from);
-    let wind_length = length(wind);
     let edge_length = length(edge_direction);
-    if !(wind_length > 0.0 && edge_length > 0.0) {
+    if edge_length.is_nan() || edge_length <= 0.0 {
         return [0.0; 3];
     }
-    let w_hat = scale(wind, 1.0 / wind_length);
+    let Some((w_hat, falloff)) = wind_at(blower, position) else {
+        return [0.0; 3];
+    };
     let sin_theta = length(cross(edge_direction, w_hat)) / edge_length;
-    let rel = sub(position, blower.from);
-    let along = dot(rel, w_hat);
-    let d = length(sub(rel, scale(w_hat, along)));
-    // Nothing blows behind the nozzle, nor outside its cone.
-    let outside_cone = blower
-        .cone_half_angle
-        .is_some_and(|a| d > along * a.to_radians().tan());
-    if along <= 0.0 || outside_cone {
-        return [0.0; 3];
-    }
-    let falloff = d / blower.falloff_length + 1.0;
     scale(
         w_hat,
         blower.strength * sin_theta / (falloff * falloff) * dt,
@@ -47,10 +36,21 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
 /// the angle to the hair: air dries a fibre whatever its direction). The
 /// drying of a `dry` stage reads it (`timeline::drying`).
 pub fn blower_reach(blower: &Blower, position: V3) -> f32 {
+    match wind_at(blower, position) {
+        Some((_, falloff)) => 1.0 / (falloff * falloff),
+        None => 0.0,
+    }
+}
+
+/// The wind's direction and the falloff `d / L + 1` of (19) at `position`
+/// (`d` its distance from the wind's axis), or `None` where nothing blows:
+/// behind the nozzle, outside its cone, or for a blower of no length.
+#[inline]
+fn wind_at(blower: &Blower, position: V3) -> Option<(V3, f32)> {
     let wind = sub(blower.to, blower.from);
     let wind_length = length(wind);
-    if wind_length <= 0.0 {
-        return 0.0;
+    if wind_length.is_nan() || wind_length <= 0.0 {
+        return None;
     }
     let w_hat = scale(wind, 1.0 / wind_length);
     let rel = sub(position, blower.from);
@@ -60,10 +60,9 @@ pub fn blower_reach(blower: &Blower, position: V3) -> f32 {
         .cone_half_angle
         .is_some_and(|a| d > along * a.to_radians().tan());
     if along <= 0.0 || outside_cone {
-        return 0.0;
+        return None;
     }
-    let falloff = d / blower.falloff_length + 1.0;
-    1.0 / (falloff * falloff)
+    Some((w_hat, d / blower.falloff_length + 1.0))
 }
 
 /// [`blower_dv`] of eight vertices, one per lane of AVX registers
