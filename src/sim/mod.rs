@@ -64,6 +64,7 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
+mod grid;
 mod hair_friction;
 #[cfg(test)]
 mod hair_friction_tests;

@@ -337,6 +337,16 @@ impl Solver {
 
     /// Changes the settings from the next step on (a stage may damp more,
     /// iterate more, switch hair-hair off...).
+    /// The contacts between hairs (with Coulomb friction) the last step
+    /// found, each counted once from each of its two strands: 0 without
+    /// hair-hair friction.
+    pub fn hair_contact_count(&self) -> usize {
+        match self.parameters.hair_friction {
+            Some(mu) if mu > 0.0 => self.contacts.count(),
+            _ => 0,
+        }
+    }
+
     pub fn set_parameters(&mut self, parameters: SolverParameters) -> Result<(), SimError> {
         parameters.check()?;
         self.parameters = parameters;
