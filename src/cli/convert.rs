@@ -49,6 +49,19 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     // leaves `.NAME.PID.tmp`): removed as a bake removes its own.
     groombake::timeline::outputs::remove_stale_temporaries(std::slice::from_ref(&args.output));
     let mut grooms = super::read_sequence(&args.input)?;
+    // A prim that lacked an attribute is no loss when the USD writer writes
+    // the prims back as they were (it leaves the attribute out again).
+    if grooms.len() == 1 || args.frame.is_some() {
+        for groom in &mut grooms {
+            if exporters::keeps_source_prims(&args.output, groom) {
+                let kept: Vec<String> = groom::source_prims::zero_filled(groom)
+                    .into_iter()
+                    .map(str::to_string)
+                    .collect();
+                groom.provenance.losses.retain(|loss| !kept.contains(loss));
+            }
+        }
+    }
     // What the reader left out, before anything is written.
     super::warn_or_refuse(&super::losses(&args.input, &grooms), args.strict)?;
     for groom in &mut grooms {
@@ -130,6 +143,7 @@ fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> 
         return Err(BadInput(format!("{}: no groom", args.input.display())).into());
     };
     let units = destination_of(args, first).units;
+    let attributes = destination_of(args, first).attributes;
     let mut warnings: Vec<String> = Vec::new();
     for groom in &mut grooms {
         let up = destination_of(args, groom).up;
@@ -141,7 +155,10 @@ fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> 
         }
     }
     super::warn_or_refuse(&warnings, args.strict)?;
-    exporters::write_sequence(&args.output, &grooms)?;
+    exporters::write_sequence_as(&args.output, &grooms, attributes)?;
+    if let Some(first) = grooms.first() {
+        print_written(&args.output, first);
+    }
     Ok(())
 }
 
@@ -154,7 +171,7 @@ fn topology_warning(args: &ConvertArgs, grooms: &[groom::Groom]) -> String {
         .and_then(|g| g.frames.first())
         .map_or(0.0, |f| f.time);
     format!(
-        "{}: .{} cannot hold curve counts that change over time: only the first topology ({} strands, {} frames) is written, up to the change at {change} s of {} (.usda/.usdc keep every topology; --frame F writes frame F)",
+        "{}: .{} cannot hold curve counts that change over time: only the first topology ({} strands, {} frames) is written, up to the change at {change} s of {} (.usda/.usdc/.abc keep every topology; --frame F writes frame F)",
         args.output.display(),
         importers::extension_of(&args.output),
         first.strand_count(),

@@ -31,3 +31,5 @@ mod samples;
 mod studio;
 mod treatments;
 mod usd;
+mod usd_structure;
+mod usd_time;
