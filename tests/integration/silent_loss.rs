@@ -146,3 +146,43 @@ fn a_point_that_overflows_in_the_output_units_is_bad_input() {
     assert!(stderr.contains("32-bit floats"), "{stderr}");
     assert!(!dir.path("big.usda").exists());
 }
+
+/// A hand-written USD curves prim (USD's BasisCurves schema) carrying
+/// `curve_basis` and `curve_wrap` primvars: groombake's own names for the
+/// per-strand curve kind of grooms that mix kinds.
+fn curves_with_kind_primvars(basis_codes: &str) -> String {
+    format!(
+        "#usda 1.0\n(\n    metersPerUnit = 1\n    upAxis = \"Y\"\n)\n\n\
+         def BasisCurves \"Hair\"\n{{\n    uniform token type = \"linear\"\n\
+         \x20   int[] curveVertexCounts = [4, 4]\n\
+         \x20   point3f[] points = [(0, 0, 0), (0, -0.01, 0), (0, -0.02, 0), (0, -0.03, 0), \
+         (0.01, 0, 0), (0.01, -0.01, 0), (0.01, -0.02, 0), (0.01, -0.03, 0)]\n\
+         \x20   int[] primvars:curve_basis = [{basis_codes}] (\n        interpolation = \"uniform\"\n    )\n\
+         \x20   float[] primvars:curve_wrap = [0, 1, 2, 3, 4, 5, 6, 7] (\n        interpolation = \"vertex\"\n    )\n}}\n"
+    )
+}
+
+#[test]
+fn curve_kind_attributes_round_trip_through_usd_unchanged() {
+    // Found by the fuzz: an unknown curve_basis code became a prim named
+    // `Strands_basis7`, which USD (and groombake) refuse to read back; a
+    // curve_wrap that is no wrap code (per vertex, float) was dropped when
+    // the strands were split by curve type; and that split read back with
+    // a group_id the source never had.
+    let dir = TestDir::new();
+    for (name, codes) in [("known.usda", "0, 2"), ("unknown.usda", "7, 0")] {
+        std::fs::write(dir.path(name), curves_with_kind_primvars(codes)).unwrap();
+        for output in ["out.usda", "out.usdc"] {
+            let convert = dir.run_ok(&["convert", name, output]);
+            let stderr = String::from_utf8_lossy(&convert.stderr);
+            assert!(stderr.is_empty(), "{name} -> {output}: {stderr}");
+            let diff = dir.command().args(["diff", name, output]).output().unwrap();
+            assert!(
+                diff.status.success(),
+                "{name} -> {output}: {}{}",
+                String::from_utf8_lossy(&diff.stdout),
+                String::from_utf8_lossy(&diff.stderr)
+            );
+        }
+    }
+}
