@@ -86,10 +86,12 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     let Some(mut groom) = grooms.pop() else {
         return Err(BadInput(format!("{}: no groom", args.input.display())).into());
     };
-    warn_of_dropped_frames(&args, &groom);
+    let dropped = dropped_frames(&args, &groom);
     let destination = destination_of(&args, &groom);
     groom.convert_to(destination.units, destination.up);
-    let mut warnings = exporters::warnings(&args.output, &groom, destination.units);
+    check_in_range(&args, &groom, destination.units)?;
+    let mut warnings: Vec<String> = dropped.into_iter().collect();
+    warnings.extend(exporters::warnings(&args.output, &groom, destination.units));
     warnings.extend(exporters::order_and_pose_warnings(&args.output, &groom));
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write_as(&args.output, &groom, destination.attributes)?;
@@ -148,6 +150,7 @@ fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> 
     for groom in &mut grooms {
         let up = destination_of(args, groom).up;
         groom.convert_to(units, up);
+        check_in_range(args, groom, units)?;
         for warning in exporters::warnings(&args.output, groom, units) {
             if !warnings.contains(&warning) {
                 warnings.push(warning);
@@ -180,16 +183,35 @@ fn topology_warning(args: &ConvertArgs, grooms: &[groom::Groom]) -> String {
     )
 }
 
-/// A static format keeps one pose: say so when the input's frames are lost.
-fn warn_of_dropped_frames(args: &ConvertArgs, groom: &groom::Groom) {
+/// A static format keeps one pose: say so when the input's frames are
+/// lost (a warning, or the refusal under `--strict`).
+fn dropped_frames(args: &ConvertArgs, groom: &groom::Groom) -> Option<String> {
     let frames = groom.frames.len();
     let static_output =
         !exporters::ANIMATED_EXTENSIONS.contains(&importers::extension_of(&args.output).as_str());
-    if frames > 0 && static_output {
-        eprintln!(
-            "groombake: warning: {}: holds one pose; the {frames} frames of {} are dropped and its base pose is written (--frame F writes frame F instead)",
+    (frames > 0 && static_output).then(|| {
+        format!(
+            "{}: holds one pose; the {frames} frames of {} are dropped and its base pose is written (--frame F writes frame F instead)",
             args.output.display(),
             args.input.display()
-        );
+        )
+    })
+}
+
+/// A point finite in the input's units can overflow 32-bit floats in the
+/// output's (3e38 cm is 3e39 mm): bad input, found before writing, rather
+/// than an exporter's failure.
+fn check_in_range(
+    args: &ConvertArgs,
+    groom: &groom::Groom,
+    units: groom::Units,
+) -> anyhow::Result<()> {
+    match groom.first_fatal_problem() {
+        Some(problem) => Err(BadInput(format!(
+            "{}: {problem} in the output's units ({units}): a coordinate beyond the range of 32-bit floats",
+            args.input.display()
+        ))
+        .into()),
+        None => Ok(()),
     }
 }

@@ -28,6 +28,7 @@ mod refusals;
 mod reports;
 mod roundtrip;
 mod samples;
+mod silent_loss;
 mod studio;
 mod treatments;
 mod usd;

@@ -111,11 +111,24 @@ pub fn keeps_source_prims(groom: &Groom) -> bool {
     structure::writable(groom)
 }
 
-/// A per-strand code attribute, if the groom has one of the right size.
+/// A per-strand code attribute (`curve_basis`, `curve_wrap`), if the groom
+/// has one of the right size whose every code names a kind. Any other
+/// attribute of that name (a float, per vertex, an unknown code from a
+/// damaged or foreign file) is not a curve kind: it is written as the
+/// primvar it is, never turned into prims (an unknown code made a prim
+/// name USD refuses, and its values were lost).
 fn strand_codes<'g>(groom: &'g Groom, name: &str) -> Option<&'g [i32]> {
+    let kinds = if name == "curve_wrap" {
+        WRAPS.len()
+    } else {
+        BASES.len()
+    };
     match groom.attribute(name).map(|a| (&a.values, a.scope)) {
         Some((AttributeValues::Int(codes), Scope::Strand))
-            if codes.len() == groom.strand_count() =>
+            if codes.len() == groom.strand_count()
+                && codes
+                    .iter()
+                    .all(|&c| usize::try_from(c).is_ok_and(|c| c < kinds)) =>
         {
             Some(codes)
         }
@@ -445,8 +458,14 @@ impl CurvesScene {
                 let mut part = groom.select_strands(&strands);
                 if mixed_curves {
                     part.basis = key.basis().unwrap_or(groom.basis);
-                    part.remove_attribute("curve_basis");
-                    part.remove_attribute("curve_wrap");
+                    // The codes the prims now say; an attribute of the
+                    // same name that is no code stays.
+                    if strand_codes(groom, "curve_basis").is_some() {
+                        part.remove_attribute("curve_basis");
+                    }
+                    if strand_codes(groom, "curve_wrap").is_some() {
+                        part.remove_attribute("curve_wrap");
+                    }
                     let wrap = key.wrap().unwrap_or("nonperiodic");
                     part.provenance
                         .metadata

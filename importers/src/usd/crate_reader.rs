@@ -1206,6 +1206,10 @@ impl<'a> CrateReader<'a> {
                                 stage.default_prim =
                                     value()?.text().and_then(|t| t.first().cloned())
                             }
+                            // The crate calls the layer's doc `documentation`.
+                            "documentation" => {
+                                stage.doc = value()?.text().and_then(|t| t.first().cloned())
+                            }
                             "subLayers" => {
                                 let layers = value()?;
                                 let layers = layers.text().ok_or_else(|| {

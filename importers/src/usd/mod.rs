@@ -175,6 +175,7 @@ fn stage_at(stage: &Stage, code: f64) -> Stage {
         default_prim: stage.default_prim.clone(),
         sublayers: Vec::new(),
         notes: stage.notes.clone(),
+        doc: stage.doc.clone(),
     }
 }
 
@@ -437,7 +438,14 @@ pub(crate) struct Stage {
     pub sublayers: Vec<(String, Place, LayerOffset)>,
     /// What the reader passed over (variant sets), for the groom's info.
     pub notes: Vec<String>,
+    /// The layer's `doc` (groombake writes "Written by groombake"); `None`
+    /// for a stage composed from several layers.
+    pub doc: Option<String>,
 }
+
+/// The `doc` of the layers groombake writes: their prims split one groom
+/// by curve kind and role, never into groups of the source.
+const GROOMBAKE_DOC: &str = "Written by groombake";
 
 /// What an element of a USD value type holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1207,8 +1215,12 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 .all(|(&guide, &group)| guide == (group == 0))
         });
     // Synthesised only where the file has none: a group_id primvar (as
-    // groombake writes it) is the source's own and is kept.
-    if several && !guides_then_render && groom.attribute("group_id").is_none() {
+    // groombake writes it) is the source's own and is kept. groombake's
+    // own prims are one groom split by curve kind (told by `curve_basis`
+    // and `curve_wrap`), not groups: a group_id there would be an
+    // attribute the groom it wrote never had.
+    let own_split = stage.doc.as_deref() == Some(GROOMBAKE_DOC);
+    if several && !guides_then_render && !own_split && groom.attribute("group_id").is_none() {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
             AttributeValues::Int(group_ids),

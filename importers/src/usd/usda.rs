@@ -370,6 +370,7 @@ impl<'a> Parser<'a> {
                     "defaultPrim" => {
                         self.stage.default_prim = value.text().and_then(|t| t.first().cloned());
                     }
+                    "doc" => self.stage.doc = value.text().and_then(|t| t.first().cloned()),
                     "subLayers" => {
                         if let Value::Arcs(targets) = value {
                             for target in targets {
