@@ -79,6 +79,8 @@ mod physical_tests;
 mod quarantine;
 mod rest_pose;
 mod sag_free;
+#[cfg(test)]
+mod sag_free_tests;
 mod state;
 mod step;
 #[cfg(test)]
