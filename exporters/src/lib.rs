@@ -346,6 +346,22 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
         ));
     }
     let usd = matches!(extension.as_str(), "usda" | "usdc" | "usd");
+    if usd {
+        // USD names a primvar with an identifier: any other name is
+        // written changed, which a reader would not find under its name.
+        let renamed: Vec<String> = groom
+            .attributes
+            .iter()
+            .filter(|a| usd::identifier(&a.name) != a.name)
+            .map(|a| format!("{:?} as {}", a.name, usd::identifier(&a.name)))
+            .collect();
+        if !renamed.is_empty() {
+            warnings.push(format!(
+                "{file}: attribute name(s) that are not USD identifiers written changed: {}",
+                renamed.join(", ")
+            ));
+        }
+    }
     let bases = groom.attribute("curve_basis").map(|a| match &a.values {
         AttributeValues::Int(codes) => codes.iter().any(|&c| Some(&c) != codes.first()),
         _ => false,

@@ -757,7 +757,7 @@ fn unique_name(properties: &[Property], name: String) -> String {
 }
 
 /// A valid USD identifier: letters, digits and `_`, not starting with a digit.
-fn identifier(name: &str) -> String {
+pub(crate) fn identifier(name: &str) -> String {
     let mut out: String = name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })

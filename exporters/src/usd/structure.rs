@@ -19,6 +19,31 @@ use std::path::Path;
 /// The source prims and their paths' names, when they can be written.
 fn table(groom: &Groom) -> Option<(Vec<SourcePrim>, Vec<Vec<String>>)> {
     let table = source_prims(groom)?;
+    // `curve_basis` and `curve_wrap` are left out of the prims (each prim
+    // says its kind): only where they are the reader's per-prim kind
+    // codes. Any other attribute of those names is the groom's own data,
+    // which the flat writer keeps.
+    for name in ["curve_basis", "curve_wrap"] {
+        if groom.attribute(name).is_none() {
+            continue;
+        }
+        let kinds = if name == "curve_wrap" {
+            WRAPS.len()
+        } else {
+            BASES.len()
+        };
+        let codes = per_strand(groom, name)?;
+        let mut first = 0usize;
+        for prim in &table {
+            let own = codes.get(first..first + prim.strands)?;
+            let kind = *own.first()?;
+            if usize::try_from(kind).map_or(true, |k| k >= kinds) || own.iter().any(|&c| c != kind)
+            {
+                return None;
+            }
+            first += prim.strands;
+        }
+    }
     let components = table
         .iter()
         .map(|prim| prim_path(&prim.path))

@@ -1219,7 +1219,15 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
     // own prims are one groom split by curve kind (told by `curve_basis`
     // and `curve_wrap`), not groups: a group_id there would be an
     // attribute the groom it wrote never had.
-    let own_split = stage.doc.as_deref() == Some(GROOMBAKE_DOC);
+    // (Its split prims are `Strands...`; a groom written at its source's
+    // prim paths is read as that source was, group ids and all.)
+    let own_split = stage.doc.as_deref() == Some(GROOMBAKE_DOC)
+        && source_prims.iter().all(|prim| {
+            prim.path
+                .rsplit('/')
+                .next()
+                .is_some_and(|name| name.starts_with("Strands"))
+        });
     if several && !guides_then_render && !own_split && groom.attribute("group_id").is_none() {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
