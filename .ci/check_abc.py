@@ -32,6 +32,9 @@ must hold; its keys, all optional:
                 (a bake's wetness and bond rates, per frame)
   time_varying  the .arbGeomParams properties whose samples change; every
                 other one must be constant (stored once)
+  curves_per_sample  the number of curves of each sample (of the Curves
+                object with the most samples): a topology that changes
+                over time, nVertices written per sample
 
 Exits 1 on any failure, and when the directory holds no .abc file.
 """
@@ -91,10 +94,15 @@ def check_curves(obj, file_name, failures, totals):
     if any(b <= a for a, b in zip(times, times[1:])):
         failures.add(where, f"sample times do not increase: {times}")
     widths_param = schema.getWidthsParam()
+    curves_per_sample = []
     for index in range(samples):
-        sample = schema.getValue(Abc.ISampleSelector(index))
+        # By time: the bindings take a Python int as a time too, so
+        # ISampleSelector(index) would read sample `index` seconds in.
+        selector = Abc.ISampleSelector(float(times[index]))
+        sample = schema.getValue(selector)
         counts = list(sample.getCurvesNumVertices())
         positions = sample.getPositions()
+        curves_per_sample.append(len(counts))
         if any(c < 1 for c in counts):
             failures.add(where, f"sample {index}: a curve with no vertices")
         if sum(counts) != len(positions):
@@ -116,7 +124,7 @@ def check_curves(obj, file_name, failures, totals):
         if outside:
             failures.add(where, f"sample {index}: {len(outside)} points outside .selfBnds, e.g. {outside[0]}")
         if widths_param.valid() and widths_param.getNumSamples() > 0:
-            widths = widths_param.getExpandedValue(Abc.ISampleSelector(index)).getVals()
+            widths = widths_param.getExpandedValue(selector).getVals()
             if len(widths) not in (len(positions), len(counts), 1):
                 failures.add(
                     where,
@@ -136,6 +144,7 @@ def check_curves(obj, file_name, failures, totals):
     if samples > totals["samples"]:
         totals["samples"] = samples
         totals["times"] = times
+        totals["curves_per_sample"] = curves_per_sample
     if widths_param.valid():
         totals["width"].add(SCOPE_NAMES.get(str(widths_param.getScope()), str(widths_param.getScope())))
     arbitrary = schema.getArbGeomParams()
@@ -258,6 +267,7 @@ def check_file(path, failures):
         "curves": 0,
         "points": 0,
         "samples": 0,
+        "curves_per_sample": [],
         "times": [],
         "basis": set(),
         "width": set(),
@@ -295,6 +305,9 @@ def check_file(path, failures):
     for key in ("curves", "points", "samples"):
         if key in expect and expect[key] != totals[key]:
             failures.add(name, f"{key}: expected {expect[key]}, found {totals[key]}")
+    if "curves_per_sample" in expect and expect["curves_per_sample"] != totals["curves_per_sample"]:
+        failures.add(name, f"curves per sample: expected {expect['curves_per_sample']}, "
+                           f"found {totals['curves_per_sample']}")
     if "times" in expect:
         found = totals["times"]
         wanted = expect["times"]
@@ -337,7 +350,7 @@ def check_file(path, failures):
                 print(f"     {name}: {param} at sample {index}: {low:.4g}..{high:.4g}")
     known = {
         "kind", "curves", "points", "samples", "times", "objects", "basis", "width",
-        "unreal_groom", "scaled", "guides", "frame_values", "time_varying",
+        "unreal_groom", "scaled", "guides", "frame_values", "time_varying", "curves_per_sample",
     }
     unknown = set(expect) - known
     if unknown:

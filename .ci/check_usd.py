@@ -11,7 +11,8 @@ time sample), widths and primvar sizes against their interpolation
 computes, the time-code range, and the expectations the test wrote beside
 the file in `<file>.expect.json` (keys: curves, points, prims, first_point,
 meters_per_unit, up_axis, basis, time_samples, start_time_code,
-end_time_code, time_codes_per_second, widths, primvars, and sample_points:
+end_time_code, time_codes_per_second, widths and primvars (their
+interpolation in every curves prim that has them, some prim must), and sample_points:
 `[time code, point index, [x, y, z]]` items checked in the first curves prim,
 and topology: `[time code, curves, points]` items for a file whose
 curveVertexCounts are time samples; frame_values: `{primvar: [[time code,
@@ -92,9 +93,16 @@ def check_file(path):
     if stage is None:
         return ["usd-core cannot open it"]
 
+    # An Xform root (groombake's `Groom`, or a source's parent kept), or a
+    # source's root curves prim kept at its path.
     default = stage.GetDefaultPrim()
-    if not default or default.GetTypeName() != "Xform":
-        fail("the default prim is not an Xform")
+    if not default or default.GetTypeName() not in ("Xform", "BasisCurves"):
+        fail("the default prim is not an Xform or a curves prim")
+    # Expected widths and primvars: every curves prim that has one has it
+    # at the expected interpolation, and some prim has it (a prim kept from
+    # a source prim that lacked it lacks it too).
+    seen_widths = False
+    seen_primvars = set()
     curves_prims = []
     for prim in stage.Traverse():
         if prim.GetTypeName() not in KNOWN_TYPES:
@@ -184,8 +192,7 @@ def check_file(path):
                 fail(f"{prim_path}: {len(widths)} widths do not fit {interpolation} interpolation")
             if "widths" in expect and interpolation != expect["widths"]:
                 fail(f"{prim_path}: widths interpolation {interpolation} != {expect['widths']}")
-        elif "widths" in expect:
-            fail(f"{prim_path}: no widths")
+            seen_widths = True
 
         primvars = {pv.GetPrimvarName(): pv for pv in UsdGeom.PrimvarsAPI(curves).GetPrimvars()
                     if pv.HasAuthoredValue()}
@@ -197,10 +204,17 @@ def check_file(path):
                      f"not a {primvar.GetInterpolation()} size")
         for name, interpolation in expect.get("primvars", {}).items():
             if name not in primvars:
-                fail(f"{prim_path}: no primvar {name}")
-            elif primvars[name].GetInterpolation() != interpolation:
+                continue
+            seen_primvars.add(name)
+            if primvars[name].GetInterpolation() != interpolation:
                 fail(f"{prim_path}: primvar {name} is {primvars[name].GetInterpolation()}, "
                      f"expected {interpolation}")
+
+    if "widths" in expect and curves_prims and not seen_widths:
+        fail("no curves prim has widths")
+    for name in expect.get("primvars", {}):
+        if curves_prims and name not in seen_primvars:
+            fail(f"no curves prim has primvar {name}")
 
     # Per-frame attributes: time samples where they change, none elsewhere.
     if "time_varying" in expect:

@@ -14,6 +14,13 @@ A reading with `samples` (a file whose curveVertexCounts are time samples:
 `[{"time_code", "counts", "points"}]`, as groombake's read_sequence gives
 them) is compared at each of those time codes, and usd-core's time samples
 of counts and points must be exactly those time codes.
+A reading with `round_trip` (`{"source", "outputs"}`: groombake's
+`convert --strict` of an OpenUSD test file to .usda and .usdc) compares
+usd-core's reading of each output with its reading of the source: the same
+BasisCurves prim paths in the same order, the same curve and vertex counts
+per prim, world points to 1e-5, and each authored source width at each of
+its places equal to the output's width there; time-sampled counts (a
+changing topology) are compared at each of the source's time codes.
 A reading with `prims` (OpenUSD's own test files, tests/data/usd/openusd/)
 is compared prim by prim: the BasisCurves prims usd-core reads (counts
 authored and not empty, as many points as the counts add up to) must be
@@ -69,17 +76,35 @@ def usd_core_reading_at(source, code):
     return counts, points, sorted(codes)
 
 
+def reading_of_prims_at(source, paths, code):
+    """Counts and world points of the prims at `paths` at a time code."""
+    stage = Usd.Stage.Open(str(source))
+    time = Usd.TimeCode(code)
+    counts, points = [], []
+    for path in paths:
+        prim = stage.GetPrimAtPath(path)
+        curves = UsdGeom.BasisCurves(prim)
+        counts.extend(curves.GetCurveVertexCountsAttr().Get(time) or [])
+        world = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(time)
+        points.extend(tuple(world.Transform(p)) for p in curves.GetPointsAttr().Get(time) or [])
+    return counts, points
+
+
 def readable_prims(source):
     """usd-core's reading of every BasisCurves prim it can read: (path,
     counts, world points, widths or None, interpolation, type, basis,
     wrap)."""
     stage = Usd.Stage.Open(str(source))
     prims = []
-    time = Usd.TimeCode.Default()
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         if not prim.IsA(UsdGeom.BasisCurves):
             continue
         curves = UsdGeom.BasisCurves(prim)
+        time = Usd.TimeCode.Default()
+        samples = curves.GetCurveVertexCountsAttr().GetTimeSamples()
+        if curves.GetCurveVertexCountsAttr().Get(time) is None and samples:
+            # Time-sampled only (a changing topology): its first sample.
+            time = Usd.TimeCode(samples[0])
         counts = curves.GetCurveVertexCountsAttr().Get(time)
         points = curves.GetPointsAttr().Get(time)
         if not counts or points is None or len(points) != sum(counts):
@@ -159,6 +184,67 @@ def prim_difference(source, mine):
     return compared
 
 
+def per_point_widths(prim):
+    """The width at each point of a prim, None where the source authors
+    none (cubic varying widths leave the points between segment ends)."""
+    out = [None] * sum(prim["counts"])
+    if prim["widths"] is None:
+        return out
+    groups = width_points(prim)
+    if len(groups) != len(prim["widths"]):
+        return None
+    for value, group in zip(prim["widths"], groups):
+        for index in group:
+            out[index] = value
+    return out
+
+
+def round_trip_difference(source, output):
+    """What differs between usd-core's readings of a source and of
+    groombake's output of it, or a count of compared values."""
+    theirs, mine = readable_prims(source), readable_prims(output)
+    paths, mine_paths = [p["path"] for p in theirs], [p["path"] for p in mine]
+    if paths != mine_paths:
+        return f"prim paths: source {paths}, output {mine_paths}"
+    compared = 0
+    for a, b in zip(theirs, mine):
+        if a["counts"] != b["counts"]:
+            return f"{a['path']}: counts: source {a['counts']}, output {b['counts']}"
+        if (a["type"], a["basis"], a["wrap"]) != (b["type"], b["basis"], b["wrap"]):
+            return f"{a['path']}: curves: source {(a['type'], a['basis'], a['wrap'])}, output {(b['type'], b['basis'], b['wrap'])}"
+        problem = difference(a["counts"], a["points"], b["counts"], b["points"])
+        if problem:
+            return f"{a['path']}: {problem}"
+        want, got = per_point_widths(a), per_point_widths(b)
+        if want is None or got is None:
+            return f"{a['path']}: widths do not fit their interpolation"
+        for index, (w, g) in enumerate(zip(want, got)):
+            if w is None:
+                continue
+            if g is None or not math.isclose(w, g, rel_tol=1e-6, abs_tol=1e-7):
+                return f"{a['path']}: width at point {index}: source {w}, output {g}"
+            compared += 1
+        if a["widths"] is None and b["widths"] is not None:
+            return f"{a['path']}: the source has no widths, the output {len(b['widths'])}"
+        compared += len(a["points"])
+    # A changing topology: every time code of the readable prims' counts.
+    stage = Usd.Stage.Open(str(source))
+    codes = sorted({
+        code
+        for path in paths
+        for code in UsdGeom.BasisCurves(stage.GetPrimAtPath(path))
+        .GetCurveVertexCountsAttr().GetTimeSamples()
+    })
+    for code in codes:
+        want = reading_of_prims_at(source, paths, code)
+        got = reading_of_prims_at(output, paths, code)
+        problem = difference(want[0], want[1], got[0], got[1])
+        if problem:
+            return f"at time code {code}: {problem}"
+        compared += len(want[1])
+    return compared
+
+
 def difference(counts, points, mine_counts, mine_points):
     """What differs between usd-core's reading and groombake's, or None."""
     if counts != mine_counts:
@@ -201,6 +287,17 @@ def main():
             else:
                 print(f"ok   {name}: counts and points at time codes {mine_codes} "
                       "as usd-core reads them")
+            continue
+        if "round_trip" in mine:
+            trip = mine["round_trip"]
+            for output in trip["outputs"]:
+                problem = round_trip_difference(trip["source"], output)
+                if isinstance(problem, str):
+                    failures += 1
+                    print(f"FAIL {name} -> {Path(output).name}: {problem}")
+                else:
+                    print(f"ok   {name} -> {Path(output).name}: prim paths, counts, "
+                          f"{problem} points and widths as in the source")
             continue
         if "prims" in mine:
             problem = prim_difference(mine["source"], mine)

@@ -119,5 +119,28 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, step);
+/// Hair-hair friction's cost (issue 33: at most 1.5x the frictionless
+/// step): 300 strands x 32 of 24 cm hair combed down over a head-size
+/// ball, settled 1 s, then the same step with pairwise hair-hair
+/// frictionless and with friction mu 0.3, on 1 thread
+/// (`examples/hair_friction_cost.rs` counts the contacts and, under
+/// valgrind, the instructions).
+fn hair_friction(c: &mut Criterion) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    let mut group = c.benchmark_group("hair_friction_step");
+    for (name, mu) in [("frictionless", None), ("mu_0.3", Some(0.3))] {
+        let mut scene = pool
+            .install(|| groombake::bench::resting_hair(300, 32, mu, 360))
+            .expect("scene");
+        group.bench_function(format!("resting_300x32_{name}"), |b| {
+            b.iter(|| pool.install(|| scene.step().expect("step")))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, step, hair_friction);
 criterion_main!(benches);

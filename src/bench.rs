@@ -312,6 +312,57 @@ impl Workload {
     }
 }
 
+/// Hair resting on hair for the friction bench (issue 33): `strands`
+/// strands of 24 cm real hair x `vertices`, combed down (drape 12 rad/m,
+/// as `samples/wind.toml`) from the cap of a head-size ball (radius 8 cm,
+/// also the collider, friction 0.3), pairwise hair-hair on (alpha 5) and
+/// `hair_friction` (`None`: frictionless), then `settle` steps of gravity
+/// without hair-hair friction, so the hair lies on the ball and on itself
+/// (the same start with and without friction).
+pub fn resting_hair(
+    strands: usize,
+    vertices: usize,
+    hair_friction: Option<f32>,
+    settle: usize,
+) -> Result<Scene, BenchError> {
+    let groom = crate::generate::generate(&crate::generate::GeneratorParameters {
+        strands,
+        length: 0.24,
+        segment_length: 0.24 / (vertices.max(2) - 1) as f32,
+        head_radii: [0.08; 3],
+        drape: 12.0,
+        ..Default::default()
+    })?;
+    let parameters = SolverParameters {
+        hair_hair_strength: Some(5.0),
+        ..SolverParameters::default()
+    };
+    let mut scene = Scene {
+        strands: StrandSet::from_groom(&groom, &Material::default())?,
+        solver: Solver::new(parameters)?,
+        colliders: ColliderSet::new(),
+        environment: Environment::default(),
+        delivery: None,
+        steps: 0,
+        solves: 0,
+        phases: PhaseTimes::default(),
+    };
+    scene.colliders.insert(Collider::new(
+        "head",
+        SharedShape::ball(0.08),
+        Pose::IDENTITY,
+        0.3,
+    ));
+    for _ in 0..settle {
+        scene.step()?;
+    }
+    scene.solver.set_parameters(SolverParameters {
+        hair_friction,
+        ..parameters
+    })?;
+    Ok(scene)
+}
+
 impl Delivery {
     /// Grows `count` render hairs between the guides (as `[groom] render`
     /// does) and opens the animated export.

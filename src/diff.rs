@@ -215,6 +215,25 @@ fn compare_attribute(collector: &mut Collector, offsets: &[usize], a: &Attribute
     }
 }
 
+/// An attribute per vertex: a per-strand one's value repeated over each of
+/// its strand's vertices.
+fn per_vertex(attribute: &Attribute, groom: &Groom) -> Attribute {
+    if attribute.scope == groom::Scope::Vertex {
+        return attribute.clone();
+    }
+    let each_vertex: Vec<std::ops::Range<usize>> = groom
+        .strand_vertex_counts
+        .iter()
+        .enumerate()
+        .flat_map(|(strand, &n)| std::iter::repeat_n(strand..strand + 1, n as usize))
+        .collect();
+    Attribute {
+        name: attribute.name.clone(),
+        scope: groom::Scope::Vertex,
+        values: attribute.values.select(&each_vertex),
+    }
+}
+
 /// The first difference of topology, if any.
 fn topology_difference(a: &Groom, b: &Groom) -> Option<String> {
     if a.strand_count() != b.strand_count() {
@@ -280,10 +299,18 @@ fn compare_attributes(
             continue;
         };
         if attribute.scope != other.scope {
-            structural.push(format!(
-                "attribute {}: per {:?} in A, per {:?} in B",
-                attribute.name, attribute.scope, other.scope
-            ));
+            // Per strand in one file and per vertex in the other (`.hair`
+            // holds widths per vertex): the same data when every vertex of
+            // a strand holds the strand's value, so compared per vertex.
+            let (x, y) = (per_vertex(attribute, a), per_vertex(other, b));
+            if x.values.components() == y.values.components() && x.values.len() == y.values.len() {
+                compare_attribute(collector, offsets, &x, &y);
+            } else {
+                structural.push(format!(
+                    "attribute {}: per {:?} in A, per {:?} in B",
+                    attribute.name, attribute.scope, other.scope
+                ));
+            }
         } else if attribute.values.components() != other.values.components()
             || attribute.values.len() != other.values.len()
         {
@@ -460,6 +487,27 @@ mod tests {
         let mut b = groom();
         b.convert_to(Units::CENTIMETERS, UpAxis::Z);
         assert!(diff(&groom(), &b, &DiffOptions::default()).equal);
+    }
+
+    #[test]
+    fn a_per_strand_value_held_per_vertex_is_the_same_data() {
+        let mut b = groom();
+        b.set_attribute(Attribute {
+            name: "id".into(),
+            scope: groom::Scope::Vertex,
+            values: AttributeValues::Int(vec![7, 7, 8, 8, 8]),
+        });
+        let report = diff(&groom(), &b, &DiffOptions::default());
+        assert!(report.equal, "{report:?}");
+        b.set_attribute(Attribute {
+            name: "id".into(),
+            scope: groom::Scope::Vertex,
+            values: AttributeValues::Int(vec![7, 7, 8, 9, 8]),
+        });
+        let report = diff(&groom(), &b, &DiffOptions::default());
+        assert!(!report.equal);
+        let d = &report.largest[0];
+        assert_eq!((d.strand, d.vertex), (1, Some(1)), "{d:?}");
     }
 
     #[test]

@@ -163,22 +163,41 @@ pub fn write_as(path: &Path, groom: &Groom, attributes: AttributeSet) -> Result<
     }
 }
 
+/// Whether writing `groom` to `path` keeps the prims it was read from (a
+/// USD output of a groom read from USD whose prims still describe its
+/// strands): then the attributes a prim lacked stay absent instead of
+/// being written as zeros ([`groom::source_prims`]).
+pub fn keeps_source_prims(path: &Path, groom: &Groom) -> bool {
+    matches!(extension_of(path).as_str(), "usda" | "usdc" | "usd") && usd::keeps_source_prims(groom)
+}
+
 /// Whether the format at `path` holds curve counts that change over time
-/// (USD, as time-sampled `curveVertexCounts`).
+/// (USD, as time-sampled `curveVertexCounts`; Alembic, as `nVertices` per
+/// sample).
 pub fn holds_topology_changes(path: &Path) -> bool {
-    matches!(extension_of(path).as_str(), "usda" | "usdc" | "usd")
+    matches!(extension_of(path).as_str(), "usda" | "usdc" | "usd" | "abc")
 }
 
 /// Writes grooms that follow each other in time with different topologies
 /// (`importers::read_sequence`) to a format that holds topology changes
 /// ([`holds_topology_changes`]); other formats are refused.
 pub fn write_sequence(path: &Path, grooms: &[Groom]) -> Result<(), ExportError> {
+    write_sequence_as(path, grooms, AttributeSet::default())
+}
+
+/// [`write_sequence`] with the attribute names of a destination.
+pub fn write_sequence_as(
+    path: &Path,
+    grooms: &[Groom],
+    attributes: AttributeSet,
+) -> Result<(), ExportError> {
     for groom in grooms {
         check_exportable(path, groom)?;
     }
     match extension_of(path).as_str() {
         "usda" => usd::write_sequence(path, grooms, usd::Encoding::Text),
         "usdc" | "usd" => usd::write_sequence(path, grooms, usd::Encoding::Crate),
+        "abc" => abc::curves::write_sequence(path, grooms, attributes),
         _ => Err(ExportError::Unsupported {
             file: path.to_path_buf(),
             message: "this format cannot hold curve counts that change over time".into(),
@@ -327,6 +346,22 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
         ));
     }
     let usd = matches!(extension.as_str(), "usda" | "usdc" | "usd");
+    if usd {
+        // USD names a primvar with an identifier: any other name is
+        // written changed, which a reader would not find under its name.
+        let renamed: Vec<String> = groom
+            .attributes
+            .iter()
+            .filter(|a| usd::identifier(&a.name) != a.name)
+            .map(|a| format!("{:?} as {}", a.name, usd::identifier(&a.name)))
+            .collect();
+        if !renamed.is_empty() {
+            warnings.push(format!(
+                "{file}: attribute name(s) that are not USD identifiers written changed: {}",
+                renamed.join(", ")
+            ));
+        }
+    }
     let bases = groom.attribute("curve_basis").map(|a| match &a.values {
         AttributeValues::Int(codes) => codes.iter().any(|&c| Some(&c) != codes.first()),
         _ => false,

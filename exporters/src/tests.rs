@@ -542,3 +542,30 @@ fn usda_writes_large_and_tiny_floats_in_exponent_form() {
     let back = importers::read(&path).unwrap();
     assert_eq!(back.points, groom.points);
 }
+
+/// A name USD cannot hold (a damaged file's `groom_grou` and four NULs, as
+/// the round-trip fuzz found) is written changed: said, never silent.
+#[test]
+fn an_attribute_name_usd_cannot_hold_is_warned() {
+    let mut groom = sample_groom();
+    let count = groom.strand_count();
+    groom.attributes.push(Attribute::per_strand(
+        "groom_grou\0\0\0\0",
+        AttributeValues::Float(vec![1.0; count]),
+    ));
+    for name in ["a.usda", "a.usdc"] {
+        let warnings = crate::warnings(Path::new(name), &groom, Units::METERS);
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.contains("not USD identifiers") && w.contains("groom_grou____")),
+            "{warnings:?}"
+        );
+    }
+    groom.attributes.pop();
+    let warnings = crate::warnings(Path::new("a.usda"), &groom, Units::METERS);
+    assert!(
+        !warnings.iter().any(|w| w.contains("not USD identifiers")),
+        "{warnings:?}"
+    );
+}

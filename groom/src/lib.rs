@@ -12,6 +12,7 @@ pub mod curves;
 pub mod guides;
 pub mod interpolate;
 pub mod math;
+pub mod source_prims;
 mod units;
 mod validate;
 

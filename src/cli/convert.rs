@@ -49,6 +49,19 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     // leaves `.NAME.PID.tmp`): removed as a bake removes its own.
     groombake::timeline::outputs::remove_stale_temporaries(std::slice::from_ref(&args.output));
     let mut grooms = super::read_sequence(&args.input)?;
+    // A prim that lacked an attribute is no loss when the USD writer writes
+    // the prims back as they were (it leaves the attribute out again).
+    if grooms.len() == 1 || args.frame.is_some() {
+        for groom in &mut grooms {
+            if exporters::keeps_source_prims(&args.output, groom) {
+                let kept: Vec<String> = groom::source_prims::zero_filled(groom)
+                    .into_iter()
+                    .map(str::to_string)
+                    .collect();
+                groom.provenance.losses.retain(|loss| !kept.contains(loss));
+            }
+        }
+    }
     // What the reader left out, before anything is written.
     super::warn_or_refuse(&super::losses(&args.input, &grooms), args.strict)?;
     for groom in &mut grooms {
@@ -73,10 +86,12 @@ pub fn run(args: ConvertArgs) -> anyhow::Result<()> {
     let Some(mut groom) = grooms.pop() else {
         return Err(BadInput(format!("{}: no groom", args.input.display())).into());
     };
-    warn_of_dropped_frames(&args, &groom);
+    let dropped = dropped_frames(&args, &groom);
     let destination = destination_of(&args, &groom);
     groom.convert_to(destination.units, destination.up);
-    let mut warnings = exporters::warnings(&args.output, &groom, destination.units);
+    check_in_range(&args, &groom, destination.units)?;
+    let mut warnings: Vec<String> = dropped.into_iter().collect();
+    warnings.extend(exporters::warnings(&args.output, &groom, destination.units));
     warnings.extend(exporters::order_and_pose_warnings(&args.output, &groom));
     super::warn_or_refuse(&warnings, args.strict)?;
     exporters::write_as(&args.output, &groom, destination.attributes)?;
@@ -130,10 +145,12 @@ fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> 
         return Err(BadInput(format!("{}: no groom", args.input.display())).into());
     };
     let units = destination_of(args, first).units;
+    let attributes = destination_of(args, first).attributes;
     let mut warnings: Vec<String> = Vec::new();
     for groom in &mut grooms {
         let up = destination_of(args, groom).up;
         groom.convert_to(units, up);
+        check_in_range(args, groom, units)?;
         for warning in exporters::warnings(&args.output, groom, units) {
             if !warnings.contains(&warning) {
                 warnings.push(warning);
@@ -141,7 +158,10 @@ fn write_topology_changes(args: &ConvertArgs, mut grooms: Vec<groom::Groom>) -> 
         }
     }
     super::warn_or_refuse(&warnings, args.strict)?;
-    exporters::write_sequence(&args.output, &grooms)?;
+    exporters::write_sequence_as(&args.output, &grooms, attributes)?;
+    if let Some(first) = grooms.first() {
+        print_written(&args.output, first);
+    }
     Ok(())
 }
 
@@ -154,7 +174,7 @@ fn topology_warning(args: &ConvertArgs, grooms: &[groom::Groom]) -> String {
         .and_then(|g| g.frames.first())
         .map_or(0.0, |f| f.time);
     format!(
-        "{}: .{} cannot hold curve counts that change over time: only the first topology ({} strands, {} frames) is written, up to the change at {change} s of {} (.usda/.usdc keep every topology; --frame F writes frame F)",
+        "{}: .{} cannot hold curve counts that change over time: only the first topology ({} strands, {} frames) is written, up to the change at {change} s of {} (.usda/.usdc/.abc keep every topology; --frame F writes frame F)",
         args.output.display(),
         importers::extension_of(&args.output),
         first.strand_count(),
@@ -163,16 +183,35 @@ fn topology_warning(args: &ConvertArgs, grooms: &[groom::Groom]) -> String {
     )
 }
 
-/// A static format keeps one pose: say so when the input's frames are lost.
-fn warn_of_dropped_frames(args: &ConvertArgs, groom: &groom::Groom) {
+/// A static format keeps one pose: say so when the input's frames are
+/// lost (a warning, or the refusal under `--strict`).
+fn dropped_frames(args: &ConvertArgs, groom: &groom::Groom) -> Option<String> {
     let frames = groom.frames.len();
     let static_output =
         !exporters::ANIMATED_EXTENSIONS.contains(&importers::extension_of(&args.output).as_str());
-    if frames > 0 && static_output {
-        eprintln!(
-            "groombake: warning: {}: holds one pose; the {frames} frames of {} are dropped and its base pose is written (--frame F writes frame F instead)",
+    (frames > 0 && static_output).then(|| {
+        format!(
+            "{}: holds one pose; the {frames} frames of {} are dropped and its base pose is written (--frame F writes frame F instead)",
             args.output.display(),
             args.input.display()
-        );
+        )
+    })
+}
+
+/// A point finite in the input's units can overflow 32-bit floats in the
+/// output's (3e38 cm is 3e39 mm): bad input, found before writing, rather
+/// than an exporter's failure.
+fn check_in_range(
+    args: &ConvertArgs,
+    groom: &groom::Groom,
+    units: groom::Units,
+) -> anyhow::Result<()> {
+    match groom.first_fatal_problem() {
+        Some(problem) => Err(BadInput(format!(
+            "{}: {problem} in the output's units ({units}): a coordinate beyond the range of 32-bit floats",
+            args.input.display()
+        ))
+        .into()),
+        None => Ok(()),
     }
 }

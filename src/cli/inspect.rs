@@ -188,7 +188,10 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let losses = super::losses(&args.file, &grooms);
     summary["warnings"] = json!(losses);
     for loss in &losses {
-        eprintln!("groombake: warning: {loss}");
+        eprintln!(
+            "groombake: warning: {}",
+            super::shortened(&super::printable(loss))
+        );
     }
     if grooms.len() > 1 {
         // Frames of the whole sequence; the other facts are of the first

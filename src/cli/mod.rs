@@ -140,8 +140,9 @@ pub fn printable(text: &str) -> String {
     out
 }
 
-/// The longest error or warning line, in characters (after `groombake: `).
-pub const MAX_LINE: usize = 300;
+/// The longest error or warning message, in characters: with its
+/// `groombake: warning: ` in front (20 characters), a line stays within 300.
+pub const MAX_LINE: usize = 280;
 /// A word (a run without spaces: a token, a path) longer than this many
 /// characters is shown by its two ends and its length.
 const MAX_WORD: usize = 120;
@@ -263,13 +264,27 @@ pub fn check_output_path(path: &std::path::Path) -> anyhow::Result<()> {
 }
 
 /// Reads a groom file as a sequence of grooms of one topology each
-/// (`importers::read_sequence`), refusing one with fatal problems.
+/// (`importers::read_sequence`), refusing one with fatal problems and one
+/// with no strand at all: nothing in it reads as hair, so there is nothing
+/// to inspect, convert or compare (the message adds what the reader
+/// skipped, such as a glTF's triangle primitives).
 pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>> {
     let grooms = importers::read_sequence(path)?;
     for groom in &grooms {
         if let Some(problem) = groom.first_fatal_problem() {
             return Err(BadInput(format!("{}: {problem}", path.display())).into());
         }
+    }
+    if grooms.iter().all(|g| g.strand_count() == 0) {
+        let skipped: Vec<&String> = grooms.iter().flat_map(|g| &g.provenance.losses).collect();
+        let mut message = format!(
+            "{}: no strands: nothing in the file reads as hair",
+            path.display()
+        );
+        if let Some(first) = skipped.first() {
+            message.push_str(&format!(" ({first})"));
+        }
+        return Err(BadInput(message).into());
     }
     Ok(grooms)
 }

@@ -5,8 +5,13 @@
 //! strands are advanced in parallel, so the result does not depend on the
 //! thread count. (The physical model's contacts between strands with
 //! Coulomb friction, which the penalty leaves little to do once on, are in
-//! hair_friction.rs.)
+//! hair_friction.rs; the grid's cells, walk and sort, shared by both, in
+//! grid.rs.)
 
+use super::grid::{
+    bucket_bits, bucket_of, cell_of, crossings, pack, sort_into_buckets, unpack, walk_cells,
+    Bucketed, SortScratch, MAX_CELLS_PER_EDGE,
+};
 use super::instructions::prefetch;
 use super::math::{cross, dot, is_finite3, length, scale, sub, V3};
 use super::Blower;
@@ -143,6 +148,13 @@ struct Entry {
     key: u32,
 }
 
+impl Bucketed for Entry {
+    #[inline]
+    fn cell_key(&self) -> u32 {
+        self.key
+    }
+}
+
 /// An entry as an edge's scan reads it: the vertex's position and the
 /// key and its strand (fewer bytes than an [`Entry`]: the scan is bound
 /// by memory).
@@ -173,9 +185,6 @@ const CELL: u32 = EDGE - 1;
 const CHUNK_VERTICES: usize = 2048;
 /// Sorted entries whose edges are searched together.
 const CHUNK_ENTRIES: usize = 4096;
-/// Cells an edge may cross in the grid; a longer edge (a strand torn far
-/// beyond its rest length) tests every vertex instead.
-const MAX_CELLS_PER_EDGE: usize = 96;
 /// Long edges above which the cells are doubled, so few edges test every
 /// vertex.
 const MAX_LONG_EDGES: usize = 64;
@@ -248,7 +257,7 @@ pub struct EdgeGrid {
     /// Edges that crossed too many cells in the last build.
     long_edges: usize,
     sums: Vec<V3>,
-    scratch: SortScratch,
+    scratch: SortScratch<Entry>,
     /// The last build's cell and scan, for the next cell size.
     last: Option<Measured>,
 }
@@ -302,236 +311,6 @@ fn cell_size(reach: f32, rest_longest: f32, mean_extent: f64, last: Option<Measu
         // Degenerate input (no finite edge): any cell will do.
         reach.max(1e-6) as f32
     }
-}
-
-/// `floor` as an integer, saturating far away (truncation, then one down
-/// for negatives: `floor` is a libm call on baseline x86-64).
-#[inline]
-fn floor_i32(x: f32) -> i32 {
-    let t = x as i32;
-    if (t as f32) > x {
-        // Saturating: below i32::MIN the cast already gave the end cell.
-        t.saturating_sub(1)
-    } else {
-        t
-    }
-}
-
-#[inline]
-fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
-    // Saturating float-to-int casts keep far-away points in the end cells.
-    [
-        floor_i32(p[0] * inv_cell),
-        floor_i32(p[1] * inv_cell),
-        floor_i32(p[2] * inv_cell),
-    ]
-}
-
-/// A cell as one key (10 bits per axis, so an entry is 12 bytes: cells
-/// alias only 1,024 cells apart, metres at the usual cell sizes, and an
-/// aliased edge is then rejected by the exact distance test).
-#[inline]
-fn pack(cell: [i32; 3]) -> u32 {
-    let m = (1u32 << 10) - 1;
-    ((cell[0] as u32 & m) << 20) | ((cell[1] as u32 & m) << 10) | (cell[2] as u32 & m)
-}
-
-#[inline]
-fn bucket_of(cell: [i32; 3], bits: u32) -> usize {
-    let m = (1usize << bits) - 1;
-    ((cell[0] as usize & m) << (2 * bits))
-        | ((cell[1] as usize & m) << bits)
-        | (cell[2] as usize & m)
-}
-
-/// The cell walls between cells `from` and `to`.
-#[inline]
-fn crossings(from: [i32; 3], to: [i32; 3]) -> i64 {
-    (0..3)
-        .map(|c| (i64::from(to[c]) - i64::from(from[c])).abs())
-        .sum()
-}
-
-/// Visits the cells segment `a`-`b` passes through, walked from `a` to `b`
-/// (Amanatides and Woo 1987), without repeats (hand-written: the walk is
-/// a dozen lines and the hot loop of the search). Returns false, visiting
-/// none, when there are `MAX_CELLS_PER_EDGE` or more. (A visitor rather
-/// than an array of cells: zeroing the array was a 384-byte memset per
-/// edge.)
-#[inline(always)]
-fn walk_cells(a: V3, b: V3, inv_cell: f32, mut visit: impl FnMut(u32)) -> bool {
-    let mut at = cell_of(a, inv_cell);
-    let end = cell_of(b, inv_cell);
-    if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
-        return false;
-    }
-    let mut step = [0i32; 3];
-    // Segment parameter of the next cell wall per axis, and between walls.
-    let mut next = [f32::INFINITY; 3];
-    let mut delta = [f32::INFINITY; 3];
-    for c in 0..3 {
-        let d = (b[c] - a[c]) * inv_cell;
-        let x = a[c] * inv_cell;
-        if end[c] > at[c] {
-            step[c] = 1;
-            delta[c] = 1.0 / d;
-            next[c] = ((at[c] as f32 + 1.0) - x) / d;
-        } else if end[c] < at[c] {
-            step[c] = -1;
-            delta[c] = -1.0 / d;
-            next[c] = (at[c] as f32 - x) / d;
-        }
-    }
-    visit(pack(at));
-    // One wall per step, on an axis not yet at the end cell, so the walk
-    // ends in `b`'s cell whatever round-off does at corners.
-    while at != end {
-        let mut c = 3;
-        for axis in 0..3 {
-            if at[axis] != end[axis] && (c == 3 || next[axis] < next[c]) {
-                c = axis;
-            }
-        }
-        at[c] += step[c];
-        next[c] += delta[c];
-        visit(pack(at));
-    }
-    true
-}
-
-/// Bucket ranges sorted independently (in parallel).
-const PARTS: usize = 64;
-
-/// Reusable buffers of [`sort_into_buckets`].
-#[derive(Debug, Default)]
-struct SortScratch {
-    /// Per chunk, its entries grouped by part (in order within a part).
-    grouped: Vec<Vec<Entry>>,
-    /// Per chunk, where each part starts in `grouped` (and the end).
-    part_starts: Vec<[u32; PARTS + 1]>,
-}
-
-/// A stable counting sort of the entries of `chunks` (in chunk order)
-/// into `out` by bucket (`1 << 3 bits` of them); `starts` ends as each
-/// bucket's first index and the total. Chunks first group their entries
-/// by part (a range of buckets), then each part sorts its entries from
-/// every chunk: both in parallel, each over data that fits in cache, and
-/// the result does not depend on the thread count.
-fn sort_into_buckets(
-    chunks: &[Vec<Entry>],
-    bits: u32,
-    scratch: &mut SortScratch,
-    starts: &mut Vec<u32>,
-    out: &mut Vec<Entry>,
-) {
-    use rayon::prelude::*;
-    let buckets = 1usize << (3 * bits);
-    let per_part = buckets / PARTS;
-    // Both powers of two: a shift, not a division per entry.
-    let part_shift = per_part.trailing_zeros();
-    let part_of = |e: &Entry| bucket_of(unpack(e.key), bits) >> part_shift;
-    if scratch.grouped.len() < chunks.len() {
-        scratch.grouped.resize_with(chunks.len(), Vec::new);
-    }
-    scratch.part_starts.resize(chunks.len(), [0; PARTS + 1]);
-    chunks
-        .par_iter()
-        .zip(scratch.grouped.par_iter_mut())
-        .zip(scratch.part_starts.par_iter_mut())
-        .for_each(|((chunk, grouped), part_starts)| {
-            *part_starts = [0; PARTS + 1];
-            for e in chunk {
-                part_starts[part_of(e) + 1] += 1;
-            }
-            for p in 1..=PARTS {
-                part_starts[p] += part_starts[p - 1];
-            }
-            let mut cursor = *part_starts;
-            // As much room as the chunk has: no allocation as it fills.
-            // Every slot is written below, so only a change of length
-            // touches memory here (no clearing).
-            grouped.reserve(chunk.capacity().saturating_sub(grouped.len()));
-            grouped.resize(chunk.len(), Entry::default());
-            for e in chunk {
-                let slot = &mut cursor[part_of(e)];
-                grouped[*slot as usize] = *e;
-                *slot += 1;
-            }
-        });
-    let grouped = &scratch.grouped[..chunks.len()];
-    let part_starts = &scratch.part_starts;
-    let total: usize = chunks.iter().map(Vec::len).sum();
-    // `out` and `starts` are written whole below: resized, not cleared
-    // (clearing them was a serial pass over 20 MB at 10k strands).
-    let room: usize = chunks.iter().map(Vec::capacity).sum();
-    out.reserve(room.saturating_sub(out.len()));
-    out.resize(total, Entry::default());
-    starts.resize(buckets + 1, 0);
-    starts[buckets] = total as u32;
-    // Each part's slice of `out`, cut in order without allocating.
-    let mut rest = out.as_mut_slice();
-    let mut base = 0u32;
-    let parts: [(u32, &mut [Entry]); PARTS] = std::array::from_fn(|p| {
-        let size: u32 = part_starts.iter().map(|s| s[p + 1] - s[p]).sum();
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(size as usize);
-        rest = tail;
-        base += size;
-        (base - size, mine)
-    });
-    parts
-        .into_par_iter()
-        .zip(starts[..buckets].par_chunks_mut(per_part))
-        .enumerate()
-        .for_each(|(p, ((base, out), starts))| {
-            let first_bucket = p * per_part;
-            let entries = grouped
-                .iter()
-                .zip(part_starts)
-                .flat_map(|(g, s)| &g[s[p] as usize..s[p + 1] as usize]);
-            starts.fill(0);
-            for e in entries.clone() {
-                starts[bucket_of(unpack(e.key), bits) - first_bucket] += 1;
-            }
-            let mut sum = 0;
-            for s in starts.iter_mut() {
-                let count = *s;
-                *s = sum;
-                sum += count;
-            }
-            for e in entries {
-                let slot = &mut starts[bucket_of(unpack(e.key), bits) - first_bucket];
-                out[*slot as usize] = *e;
-                *slot += 1;
-            }
-            // The cursors hold each bucket's end: back to starts, global.
-            let mut previous = 0;
-            for s in starts.iter_mut() {
-                let end = *s;
-                *s = previous + base;
-                previous = end;
-            }
-        });
-}
-
-#[inline]
-fn unpack(key: u32) -> [i32; 3] {
-    let m = (1u32 << 10) - 1;
-    [
-        ((key >> 20) & m) as i32,
-        ((key >> 10) & m) as i32,
-        (key & m) as i32,
-    ]
-}
-
-/// Bits per axis for about one bucket per item or two: at least 2 (64
-/// buckets, one per part of the sort), at most 7 (2 million buckets, 8 MB
-/// of starts: more would cost more to clear than aliasing cells do).
-fn bucket_bits(items: usize) -> u32 {
-    let mut bits = 2;
-    while (1usize << (3 * bits)) < items && bits < 7 {
-        bits += 1;
-    }
-    bits
 }
 
 impl EdgeGrid {

@@ -2,11 +2,17 @@
 //! physical model's pairwise hair-hair contact.
 //!
 //! At the start of a step every edge of an active strand finds the edges
-//! of other strands that pass within `reach` of it (two hair radii plus a
-//! margin for the step's motion) through a uniform grid of cells, and
-//! keeps one contact per pair: where on its own edge the two segments come
-//! closest (`s`), the other fibre's closest point and velocity, and the
-//! normal between them, all from the start of the step.
+//! of other strands it may touch in the step, and keeps one contact per
+//! pair: where on its own edge the two segments come closest (`s`), the
+//! other fibre's closest point and velocity, and the normal between them,
+//! all from the start of the step. A pair may touch when the gap between
+//! them is under two hair radii plus twice their closing distance in the
+//! step (and under two radii plus twice the fastest hair's, at most an
+//! edge). The search lists each edge in the cells of a uniform grid (the
+//! cells, their walk and sort are grid.rs's, shared with the pairwise
+//! penalty) within its own margin of its segment: two radii plus twice
+//! its own motion in the step, so hair at rest is listed in the few small
+//! cells along it, and only moving hair reaches further.
 //!
 //! Inside the strand's constraint solve the other fibre is a kinematic
 //! target (Jacobi between strands: it moves on with its velocity at the
@@ -30,6 +36,9 @@
 //! step and its own contacts in a fixed order, so the result is the same
 //! for any thread count and group. Buffers are kept from step to step.
 
+use super::grid::{
+    bucket_bits, bucket_of, cells_near_segment, sort_into_buckets, unpack, Bucketed, SortScratch,
+};
 use super::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
 
 /// One contact of an edge of a strand with an edge of another strand.
@@ -52,9 +61,39 @@ pub(crate) struct HairContact {
 const CHUNK_STRANDS: usize = 32;
 /// Edges per task when the grid is filled.
 const CHUNK_EDGES: usize = 4096;
-/// Cells an edge's box may cover; an edge torn longer finds no contacts
-/// (the hair-hair penalty still pushes it).
-const MAX_CELLS_PER_EDGE: i64 = 64;
+/// Cells per longest rest edge. An edge is listed only in the cells near
+/// its segment (within its margin), so cells of an edge are few per edge
+/// and hold few edges; per step of hair at rest on a head (300 strands x
+/// 32), half-edge cells cost 1.3x the instructions and quarter-edge ones
+/// 2.1x (an edge's margin then reaches more of them).
+const CELLS_PER_REST_EDGE: f32 = 1.0;
+/// Cells an edge may be listed in; an edge near more (torn, or moving a
+/// rest edge in a step) is searched against every edge instead.
+const MAX_NEAR_CELLS: usize = 512;
+/// Such edges above which the cells are doubled.
+const MAX_LONG_EDGES: usize = 64;
+/// The span of an edge near too many cells.
+const NOT_PLACED: (u32, u32) = (u32::MAX, u32::MAX);
+
+/// An edge listed in one cell near it, with what a scan of the cell tests.
+#[derive(Debug, Clone, Copy, Default)]
+struct Placed {
+    a: V3,
+    b: V3,
+    /// How near the edge may come to another this step (see `margin`), m.
+    margin: f32,
+    strand: u32,
+    /// Global index of its first vertex.
+    edge: u32,
+    key: u32,
+}
+
+impl Bucketed for Placed {
+    #[inline]
+    fn cell_key(&self) -> u32 {
+        self.key
+    }
+}
 
 /// The contacts of every active strand's edges with other strands' edges,
 /// found by [`HairContacts::build`] at the start of a step.
@@ -64,13 +103,24 @@ pub struct HairContacts {
     distance: f32,
     /// Coulomb's coefficient between hairs.
     mu: f32,
-    inv_cell: f32,
     /// The strand of each vertex of an active strand, `u32::MAX` otherwise.
     owner: Vec<u32>,
-    /// Per chunk of edges, (cell key, first vertex of the edge).
-    key_chunks: Vec<Vec<(u64, u32)>>,
-    /// All of them, sorted by key then edge.
-    keys: Vec<(u64, u32)>,
+    /// Per chunk of edges, each edge in the cells near it; the edges near
+    /// too many cells (searched against all); scratch for an edge's cells.
+    placed_chunks: Vec<Vec<Placed>>,
+    long_chunks: Vec<Vec<Placed>>,
+    cell_chunks: Vec<Vec<u32>>,
+    /// Per vertex, where the cells of the edge starting there are in its
+    /// chunk of `placed_chunks` (the search reads them back); `(0, 0)`
+    /// without an edge, `NOT_PLACED` for an edge near too many cells.
+    spans: Vec<(u32, u32)>,
+    /// All of them, sorted by bucket, and each bucket's start.
+    placed: Vec<Placed>,
+    starts: Vec<u32>,
+    axis_bits: u32,
+    /// The edges near too many cells, in edge order.
+    long: Vec<Placed>,
+    scratch: SortScratch<Placed>,
     /// Per chunk of strands: their contacts in strand then edge order, and
     /// each strand's range of them.
     chunks: Vec<Chunk>,
@@ -82,29 +132,84 @@ pub struct HairContacts {
 struct Chunk {
     contacts: Vec<HairContact>,
     ranges: Vec<(u32, u32)>,
+    /// Scratch: the edges an edge found in its cells.
+    found: Vec<u32>,
 }
 
-/// The cell of a point, clamped so that far-off points cannot overflow.
+/// How near an edge (first vertex `v`) may come to another this step: the
+/// contact distance `distance` plus twice the farthest its faster vertex
+/// moves in `dt` (at most `longest`). Two edges closer than the sum of
+/// their margins are all the pairs the contact test below may keep: it
+/// asks for a gap under `2 distance + 2 closing dt` (the closing speed is
+/// at most the sum of the two edges' fastest vertices) and under `reach`
+/// (`2 distance + min(2 fastest dt, longest)`).
 #[inline]
-fn cell_of(p: V3, inv_cell: f32) -> [i32; 3] {
-    p.map(|c| (c * inv_cell).floor().clamp(-1.0e6, 1.0e6) as i32)
+fn margin(velocities: &[V3], v: usize, distance: f32, longest: f32, dt: f32) -> f32 {
+    let fastest = length(velocities[v]).max(length(velocities[v + 1]));
+    // (NaN or infinite speeds: the longest, like a fast edge.)
+    distance + (2.0 * fastest * dt).min(longest)
 }
 
-/// A cell as one sortable key (21 bits per axis).
+/// The contact of edge `v` (`a`-`b`) with edge `f` (`c`-`d`) of another
+/// strand, when they may touch in the step: their closest points are the
+/// contact of their features, the gap between them is under `reach` and
+/// under two contact `distance`s plus twice their closing distance in
+/// `dt`. (`edge` of the result is left 0: the caller's.)
+#[allow(clippy::too_many_arguments)]
 #[inline]
-fn pack(c: [i32; 3]) -> u64 {
-    let axis = |v: i32| (v as i64 + (1 << 20)) as u64 & ((1 << 21) - 1);
-    axis(c[0]) << 42 | axis(c[1]) << 21 | axis(c[2])
-}
-
-/// The box of segment `a`-`b` grown by `grow`, as cells; `None` when it
-/// covers too many.
-#[inline]
-fn cell_box(a: V3, b: V3, grow: f32, inv_cell: f32) -> Option<([i32; 3], [i32; 3])> {
-    let lo = cell_of(std::array::from_fn(|k| a[k].min(b[k]) - grow), inv_cell);
-    let hi = cell_of(std::array::from_fn(|k| a[k].max(b[k]) + grow), inv_cell);
-    let count: i64 = (0..3).map(|k| i64::from(hi[k] - lo[k]) + 1).product();
-    (count <= MAX_CELLS_PER_EDGE).then_some((lo, hi))
+fn contact(
+    edge_of: &impl Fn(usize) -> Option<(u32, V3, V3)>,
+    velocities: &[V3],
+    v: usize,
+    f: usize,
+    a: V3,
+    b: V3,
+    c: V3,
+    d: V3,
+    reach: f32,
+    distance: f32,
+    dt: f32,
+) -> Option<HairContact> {
+    let (s, t) = closest_parameters(a, b, c, d);
+    if !closest_feature(edge_of, v, f, s, t, a, c) {
+        return None;
+    }
+    let (on_own, on_other) = (lerp3(a, b, s), lerp3(c, d, t));
+    let gap = sub(on_own, on_other);
+    let gap_length = length(gap);
+    if gap_length.is_nan() || gap_length >= reach {
+        return None;
+    }
+    let normal = if gap_length > 1e-3 * distance {
+        scale(gap, 1.0 / gap_length)
+    } else {
+        // Crossing at their axes: across both.
+        let across = cross(sub(b, a), sub(d, c));
+        let l = length(across);
+        if l.is_nan() || l <= 0.0 {
+            return None;
+        }
+        scale(across, 1.0 / l)
+    };
+    let other_velocity = lerp3(velocities[f], velocities[f + 1], t);
+    let own_velocity = lerp3(velocities[v], velocities[v + 1], s);
+    // Only fibres that may touch in this step: two radii plus twice their
+    // closing distance (a margin of the fastest hair's motion made hair
+    // that falls together touch everything within millimetres).
+    let closing = length(sub(own_velocity, other_velocity));
+    if !is_finite3(other_velocity)
+        || closing.is_nan()
+        || gap_length >= 2.0 * distance + 2.0 * closing * dt
+    {
+        return None;
+    }
+    Some(HairContact {
+        edge: 0,
+        s,
+        other: on_other,
+        other_velocity,
+        normal,
+    })
 }
 
 /// The closest points of segments `p1`-`q1` and `p2`-`q2`: the parameters
@@ -201,6 +306,12 @@ impl HairContacts {
     /// StrandSet) at `positions` with `velocities`, for hair radius
     /// `radius` and Coulomb coefficient `mu`; `rest_longest` is the
     /// longest rest edge (sizes the cells), `dt` the step.
+    ///
+    /// Each edge is listed in the grid cells within its margin (see
+    /// [`margin`]: its contact distance and how far it moves in the step)
+    /// of its segment, cut where it crosses cell walls, and searches the
+    /// cells it is listed in: two edges that may touch in the step share
+    /// one. The edges it meets are tested in edge order, each once.
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         &mut self,
@@ -224,8 +335,9 @@ impl HairContacts {
             }
         }
         let owner = &self.owner;
+        let distance = self.distance;
         // The fastest vertex bounds how far two fibres close in a step: the
-        // margin (capped at an edge, so a wild vertex cannot make the search
+        // reach (capped at an edge, so a wild vertex cannot make the search
         // quadratic).
         let fastest = velocities
             .par_iter()
@@ -237,12 +349,9 @@ impl HairContacts {
         let longest = if rest_longest.is_finite() && rest_longest > 0.0 {
             rest_longest
         } else {
-            self.distance
+            distance
         };
-        let reach = 2.0 * self.distance + (2.0 * fastest * dt).min(longest);
-        let cell = longest.max(reach);
-        self.inv_cell = 1.0 / cell;
-        let inv_cell = self.inv_cell;
+        let reach = 2.0 * distance + (2.0 * fastest * dt).min(longest);
         let edge_of = |v: usize| -> Option<(u32, V3, V3)> {
             let strand = owner[v];
             if strand == u32::MAX || owner.get(v + 1) != Some(&strand) {
@@ -252,39 +361,72 @@ impl HairContacts {
             (is_finite3(a) && is_finite3(b)).then_some((strand, a, b))
         };
 
-        // The grid: each edge in the cells its box grown by half the reach
-        // touches (two edges within `reach` then share a cell).
+        // The grid: each edge in the cells near it; cells doubled while
+        // too many edges are near too many of them.
         let edge_chunks = positions.len().div_ceil(CHUNK_EDGES);
-        if self.key_chunks.len() < edge_chunks {
-            self.key_chunks.resize_with(edge_chunks, Vec::new);
+        if self.placed_chunks.len() < edge_chunks {
+            self.placed_chunks.resize_with(edge_chunks, Vec::new);
+            self.long_chunks.resize_with(edge_chunks, Vec::new);
+            self.cell_chunks.resize_with(edge_chunks, Vec::new);
         }
-        self.key_chunks[..edge_chunks]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, out)| {
-                out.clear();
-                for v in k * CHUNK_EDGES..((k + 1) * CHUNK_EDGES).min(positions.len()) {
-                    let Some((_, a, b)) = edge_of(v) else {
-                        continue;
-                    };
-                    let Some((lo, hi)) = cell_box(a, b, 0.5 * reach, inv_cell) else {
-                        continue;
-                    };
-                    for x in lo[0]..=hi[0] {
-                        for y in lo[1]..=hi[1] {
-                            for z in lo[2]..=hi[2] {
-                                out.push((pack([x, y, z]), v as u32));
-                            }
-                        }
+        let mut cell = (longest / CELLS_PER_REST_EDGE).max(2.0 * distance);
+        self.spans.clear();
+        self.spans.resize(positions.len(), (0, 0));
+        loop {
+            let inv_cell = 1.0 / cell;
+            self.placed_chunks[..edge_chunks]
+                .par_iter_mut()
+                .zip(self.long_chunks[..edge_chunks].par_iter_mut())
+                .zip(self.cell_chunks[..edge_chunks].par_iter_mut())
+                .zip(self.spans.par_chunks_mut(CHUNK_EDGES))
+                .enumerate()
+                .for_each(|(k, (((out, long), cells), spans))| {
+                    out.clear();
+                    long.clear();
+                    for v in k * CHUNK_EDGES..((k + 1) * CHUNK_EDGES).min(positions.len()) {
+                        let Some((strand, a, b)) = edge_of(v) else {
+                            spans[v - k * CHUNK_EDGES] = (0, 0);
+                            continue;
+                        };
+                        let margin = margin(velocities, v, distance, longest, dt);
+                        let placed = |key| Placed {
+                            a,
+                            b,
+                            margin,
+                            strand,
+                            edge: v as u32,
+                            key,
+                        };
+                        spans[v - k * CHUNK_EDGES] =
+                            if cells_near_segment(a, b, margin, inv_cell, MAX_NEAR_CELLS, cells) {
+                                let start = out.len() as u32;
+                                out.extend(cells.iter().map(|&key| placed(key)));
+                                (start, out.len() as u32)
+                            } else {
+                                long.push(placed(0));
+                                NOT_PLACED
+                            };
                     }
-                }
-            });
-        self.keys.clear();
-        for chunk in &self.key_chunks[..edge_chunks] {
-            self.keys.extend_from_slice(chunk);
+                });
+            let long: usize = self.long_chunks[..edge_chunks].iter().map(Vec::len).sum();
+            if long <= MAX_LONG_EDGES || cell >= f32::MAX / 4.0 {
+                break;
+            }
+            cell *= 2.0;
         }
-        // Unique keys: any sort gives one order.
-        self.keys.par_sort_unstable();
+        self.long.clear();
+        for long in &self.long_chunks[..edge_chunks] {
+            self.long.extend_from_slice(long);
+        }
+        let total: usize = self.placed_chunks[..edge_chunks].iter().map(Vec::len).sum();
+        self.axis_bits = bucket_bits(total);
+        sort_into_buckets(
+            &self.placed_chunks[..edge_chunks],
+            self.axis_bits,
+            &mut self.scratch,
+            &mut self.starts,
+            &mut self.placed,
+        );
 
         // Each strand's contacts, in fixed chunks of strands.
         let strands = offsets.len().saturating_sub(1);
@@ -292,8 +434,8 @@ impl HairContacts {
         if self.chunks.len() < strand_chunks {
             self.chunks.resize_with(strand_chunks, Default::default);
         }
-        let keys = &self.keys;
-        let distance = self.distance;
+        let (placed, starts, long, bits) = (&self.placed, &self.starts, &self.long, self.axis_bits);
+        let (spans, placed_chunks) = (&self.spans, &self.placed_chunks);
         self.chunks[..strand_chunks]
             .par_iter_mut()
             .enumerate()
@@ -301,6 +443,7 @@ impl HairContacts {
                 let Chunk {
                     contacts: out,
                     ranges,
+                    found,
                 } = chunk;
                 out.clear();
                 ranges.clear();
@@ -315,88 +458,50 @@ impl HairContacts {
                         let Some((own, a, b)) = edge_of(v) else {
                             continue;
                         };
-                        let Some((lo, hi)) = cell_box(a, b, 0.5 * reach, inv_cell) else {
-                            continue;
+                        let margin = margin(velocities, v, distance, longest, dt);
+                        // Boxes apart by more than the two margins: no
+                        // contact (most edges of a cell).
+                        let near = |e: &Placed| {
+                            let m = margin + e.margin;
+                            e.strand != own
+                                && (0..3).all(|k| {
+                                    a[k].min(b[k]) <= e.a[k].max(e.b[k]) + m
+                                        && a[k].max(b[k]) + m >= e.a[k].min(e.b[k])
+                                })
                         };
-                        for x in lo[0]..=hi[0] {
-                            for y in lo[1]..=hi[1] {
-                                for z in lo[2]..=hi[2] {
-                                    let key = pack([x, y, z]);
-                                    let start = keys.partition_point(|e| e.0 < key);
-                                    for &(_, other) in
-                                        keys[start..].iter().take_while(|e| e.0 == key)
-                                    {
-                                        let f = other as usize;
-                                        if owner[f] == own {
-                                            continue;
-                                        }
-                                        let (c, d) = (positions[f], positions[f + 1]);
-                                        // Boxes apart by more than the reach: no
-                                        // contact (most pairs of a cell).
-                                        if (0..3).any(|k| {
-                                            a[k].min(b[k]) > c[k].max(d[k]) + reach
-                                                || a[k].max(b[k]) + reach < c[k].min(d[k])
-                                        }) {
-                                            continue;
-                                        }
-                                        // Each pair once: in the lowest cell both
-                                        // edges' boxes share.
-                                        let other_low = cell_of(
-                                            std::array::from_fn(|k| c[k].min(d[k]) - 0.5 * reach),
-                                            inv_cell,
-                                        );
-                                        if [x, y, z]
-                                            != std::array::from_fn(|k| lo[k].max(other_low[k]))
-                                        {
-                                            continue;
-                                        }
-                                        let (s, t) = closest_parameters(a, b, c, d);
-                                        if !closest_feature(&edge_of, v, f, s, t, a, c) {
-                                            continue;
-                                        }
-                                        let (on_own, on_other) = (lerp3(a, b, s), lerp3(c, d, t));
-                                        let gap = sub(on_own, on_other);
-                                        let gap_length = length(gap);
-                                        if gap_length.is_nan() || gap_length >= reach {
-                                            continue;
-                                        }
-                                        let normal = if gap_length > 1e-3 * distance {
-                                            scale(gap, 1.0 / gap_length)
-                                        } else {
-                                            // Crossing at their axes: across both.
-                                            let across = cross(sub(b, a), sub(d, c));
-                                            let l = length(across);
-                                            if l.is_nan() || l <= 0.0 {
-                                                continue;
-                                            }
-                                            scale(across, 1.0 / l)
-                                        };
-                                        let other_velocity =
-                                            lerp3(velocities[f], velocities[f + 1], t);
-                                        let own_velocity =
-                                            lerp3(velocities[v], velocities[v + 1], s);
-                                        // Only fibres that may touch in this
-                                        // step: two radii plus twice their
-                                        // closing distance (a margin of the
-                                        // fastest hair's motion made hair that
-                                        // falls together touch everything
-                                        // within millimetres).
-                                        let closing = length(sub(own_velocity, other_velocity));
-                                        if !is_finite3(other_velocity)
-                                            || closing.is_nan()
-                                            || gap_length >= 2.0 * distance + 2.0 * closing * dt
-                                        {
-                                            continue;
-                                        }
-                                        out.push(HairContact {
-                                            edge: (v - first) as u32,
-                                            s,
-                                            other: on_other,
-                                            other_velocity,
-                                            normal,
-                                        });
-                                    }
-                                }
+                        found.clear();
+                        let span = spans[v];
+                        if span != NOT_PLACED {
+                            let cells =
+                                &placed_chunks[v / CHUNK_EDGES][span.0 as usize..span.1 as usize];
+                            for &Placed { key, .. } in cells {
+                                let bucket = bucket_of(unpack(key), bits);
+                                let (from, to) =
+                                    (starts[bucket] as usize, starts[bucket + 1] as usize);
+                                found.extend(
+                                    placed[from..to]
+                                        .iter()
+                                        .filter(|e| e.key == key && near(e))
+                                        .map(|e| e.edge),
+                                );
+                            }
+                        } else {
+                            // Near too many cells: every edge.
+                            found.extend(placed.iter().filter(|e| near(e)).map(|e| e.edge));
+                        }
+                        found.extend(long.iter().filter(|e| near(e)).map(|e| e.edge));
+                        found.sort_unstable();
+                        found.dedup();
+                        for &other in found.iter() {
+                            let f = other as usize;
+                            let (c, d) = (positions[f], positions[f + 1]);
+                            if let Some(contact) =
+                                contact(&edge_of, velocities, v, f, a, b, c, d, reach, distance, dt)
+                            {
+                                out.push(HairContact {
+                                    edge: (v - first) as u32,
+                                    ..contact
+                                });
                             }
                         }
                     }
@@ -421,6 +526,14 @@ impl HairContacts {
                 .unwrap_or(&[]),
             None => &[],
         }
+    }
+
+    /// How many contacts the last build found.
+    pub fn count(&self) -> usize {
+        self.ranges
+            .iter()
+            .map(|&(_, start, end)| (end - start) as usize)
+            .sum()
     }
 
     /// Coulomb's coefficient of the last build.
@@ -621,6 +734,140 @@ pub(crate) fn restick(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `strands` random walks of `vertices` (edges about 2 mm) in a 1 cm
+    /// box, with random velocities up to 0.5 m/s, every 7th strand at
+    /// 20 m/s (near more cells than an edge may be listed in).
+    fn tangle(strands: usize, vertices: usize) -> (Vec<V3>, Vec<V3>, Vec<usize>) {
+        let mut random = crate::generate::SplitMix64::new(7);
+        let mut next = |scale: f64| (random.next_f64() * 2.0 - 1.0) * scale;
+        let (mut positions, mut velocities, mut offsets) = (Vec::new(), Vec::new(), vec![0]);
+        for strand in 0..strands {
+            let mut p = [0.0f32; 3].map(|_| next(0.005) as f32);
+            let speed = if strand % 7 == 3 { 20.0 } else { 0.5 };
+            for _ in 0..vertices {
+                positions.push(p);
+                velocities.push([0.0f32; 3].map(|_| next(speed) as f32));
+                p = std::array::from_fn(|k| p[k] + next(0.0012) as f32);
+            }
+            offsets.push(positions.len());
+        }
+        (positions, velocities, offsets)
+    }
+
+    /// Every edge against every edge of the other active strands, in edge
+    /// order.
+    fn brute_force(
+        positions: &[V3],
+        velocities: &[V3],
+        offsets: &[usize],
+        active: &[bool],
+        radius: f32,
+        rest_longest: f32,
+        dt: f32,
+    ) -> Vec<Vec<HairContact>> {
+        let distance = 2.0 * radius;
+        let mut owner = vec![u32::MAX; positions.len()];
+        for (strand, w) in offsets.windows(2).enumerate() {
+            if active[strand] {
+                owner[w[0]..w[1]].fill(strand as u32);
+            }
+        }
+        let fastest = velocities
+            .iter()
+            .zip(&owner)
+            .filter(|(v, o)| **o != u32::MAX && is_finite3(**v))
+            .map(|(v, _)| length(*v))
+            .fold(0.0, f32::max);
+        let reach = 2.0 * distance + (2.0 * fastest * dt).min(rest_longest);
+        let edge_of = |v: usize| -> Option<(u32, V3, V3)> {
+            let strand = owner[v];
+            if strand == u32::MAX || owner.get(v + 1) != Some(&strand) {
+                return None;
+            }
+            let (a, b) = (positions[v], positions[v + 1]);
+            (is_finite3(a) && is_finite3(b)).then_some((strand, a, b))
+        };
+        (0..offsets.len() - 1)
+            .map(|strand| {
+                let mut out = Vec::new();
+                for v in offsets[strand]..offsets[strand + 1] {
+                    let Some((own, a, b)) = edge_of(v) else {
+                        continue;
+                    };
+                    for f in 0..positions.len() {
+                        let Some((other, c, d)) = edge_of(f) else {
+                            continue;
+                        };
+                        if other == own {
+                            continue;
+                        }
+                        if let Some(c) =
+                            contact(&edge_of, velocities, v, f, a, b, c, d, reach, distance, dt)
+                        {
+                            out.push(HairContact {
+                                edge: (v - offsets[strand]) as u32,
+                                ..c
+                            });
+                        }
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_grid_finds_exactly_the_contacts_brute_force_finds_on_any_thread_count() {
+        let (positions, velocities, offsets) = tangle(60, 12);
+        let strands = offsets.len() - 1;
+        let active: Vec<bool> = (0..strands).map(|s| s % 11 != 5).collect();
+        let (radius, rest_longest, dt) = (3e-4, 0.002, 1.0 / 360.0);
+        let expected = brute_force(
+            &positions,
+            &velocities,
+            &offsets,
+            &active,
+            radius,
+            rest_longest,
+            dt,
+        );
+        let total: usize = expected.iter().map(Vec::len).sum();
+        let fast: usize = (0..strands)
+            .filter(|s| s % 7 == 3)
+            .map(|s| expected[s].len())
+            .sum();
+        assert!(
+            total > 500 && fast > 50,
+            "{total} contacts, {fast} of fast strands"
+        );
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut contacts = HairContacts::default();
+            // Twice: the second build reuses the first one's buffers.
+            for _ in 0..2 {
+                pool.install(|| {
+                    contacts.build(
+                        &positions,
+                        &velocities,
+                        &offsets,
+                        &active,
+                        radius,
+                        0.3,
+                        rest_longest,
+                        dt,
+                    )
+                });
+                for (strand, expected) in expected.iter().enumerate() {
+                    assert_eq!(contacts.of(strand), &expected[..], "strand {strand}");
+                }
+            }
+            assert_eq!(contacts.count(), total);
+        }
+    }
 
     #[test]
     fn crossing_segments_meet_at_their_crossing() {

@@ -64,6 +64,7 @@ mod constraints;
 pub(crate) mod contact_tests;
 mod direct;
 mod forces;
+mod grid;
 mod hair_friction;
 #[cfg(test)]
 mod hair_friction_tests;
@@ -78,6 +79,8 @@ mod physical_tests;
 mod quarantine;
 mod rest_pose;
 mod sag_free;
+#[cfg(test)]
+mod sag_free_tests;
 mod state;
 mod step;
 #[cfg(test)]

@@ -35,6 +35,20 @@
 //! strands longer than half their Greenhill length are probed: below it
 //! `w L^3 / EI < 1`, an eighth of what buckles the most vulnerable shape.
 //!
+//! A strand that cannot stand is never left worse than without the start:
+//! the probe gives it back its groomed rest shape (`probe_sag_free`), so
+//! it sags exactly as with `sag_free = false`, and the warning names it.
+//! The balance itself is bounded: no joint's rest shape changes by more
+//! than `MAX_CHANGE` (a 60 degree turn), so the start writes no kink.
+//!
+//! Hair that rests on a collider at the start (within `SUPPORT_GAP` of the
+//! head: the colliders of every stage and of the first stage, at time 0)
+//! is not a cantilever: the surface takes the load that presses into it
+//! and as much of the rest as its Coulomb friction holds, and the contacts
+//! along the strand take the moment of the hair below; only what they
+//! cannot hold goes on up the strand. The probe runs against the same
+//! colliders.
+//!
 //! Stretch is not compensated: an edge carries at most the weight of its
 //! strand, `rho A g L` (1.6e-5 N for 24 cm of real hair), against `E A`
 //! of about 17.6 N, a strain of 1e-6; the report gives the largest tip
@@ -49,6 +63,17 @@ use super::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters,
 /// needs more (long hair held out straight: a 24 cm real hair cannot stand
 /// horizontal) is held as far as that allows and counted.
 const MAX_REST: f64 = 0.95;
+
+/// The largest change of a joint's rest Darboux vector the start makes
+/// (a 60 degree turn): a balance that needs more is held that far, so the
+/// start never writes a kink.
+const MAX_CHANGE: f64 = 0.5;
+
+/// How far from a collider's surface (beyond the fibre's radius) the start
+/// counts a vertex as resting on it, metres: a groom's hair lies a few
+/// millimetres off the scalp it was combed on (the generator keeps it 2 %
+/// of the head's radius off, 1.6-2 mm), and falls that far onto it.
+pub const SUPPORT_GAP: f32 = 5.0e-3;
 
 /// How long the stability probe lets the solved strands stand, seconds.
 pub const PROBE_SECONDS: f32 = 0.5;
@@ -74,6 +99,9 @@ pub struct SagFreeReport {
     pub strands: usize,
     /// Joints whose balance needed a turn beyond `MAX_REST` (clamped).
     pub clamped_joints: usize,
+    /// Strands whose balance needed a joint's rest shape to change by
+    /// more than `MAX_CHANGE`: held as far as that allows.
+    pub limited: Vec<usize>,
     /// Joints left as they were because no bond holds them (all broken).
     pub unheld_joints: usize,
     /// The largest tip shift the weight's stretch of the edges makes,
@@ -83,6 +111,18 @@ pub struct SagFreeReport {
     /// `PROBE_SECONDS` (only filled by the probe: `make_sag_free_checked`,
     /// `probe_sag_free`).
     pub unstable: Vec<usize>,
+    /// The rest shape each solved strand had before the start changed it,
+    /// for the probe to give back to the strands that cannot stand.
+    groomed: Vec<GroomedRest>,
+}
+
+/// One strand's rest shape as groomed: the clamp's and every joint's bond
+/// memories.
+#[derive(Debug, Clone, PartialEq)]
+struct GroomedRest {
+    strand: usize,
+    root: [f32; 3],
+    memories: Vec<[V3; 4]>,
 }
 
 impl SagFreeReport {
@@ -97,7 +137,7 @@ impl SagFreeReport {
             .collect();
         (!self.unstable.is_empty()).then(|| {
             format!(
-                "sag-free: {} of {} strands cannot stand as groomed as lone hairs (strands {}{}): standing alone they move {} mm or more within {} s under gravity; thicker or stiffer hair ([material] radius, youngs_modulus), a shorter reach, neighbours that hold them, or a [material] hold keep them",
+                "sag-free: {} of {} strands cannot stand as groomed as lone hairs (strands {}{}): balanced, they move {} mm or more within {} s under gravity, so they start from their groomed rest shape and sag as with sag_free = false; thicker or stiffer hair ([material] radius, youngs_modulus), a shorter reach, hair-hair friction ([solver] hair_hair.friction) or a [material] hold keep them",
                 self.unstable.len(),
                 self.strands,
                 first.join(", "),
@@ -145,10 +185,31 @@ impl StrandSet {
     /// clamped. Physical model only (the paper's model has no weight in
     /// real units): with `model = "paper"` nothing changes.
     pub fn make_sag_free(&mut self, gravity: [f32; 3]) -> SagFreeReport {
+        self.make_sag_free_supported(gravity, &ColliderSet::new(), 0.0)
+    }
+
+    /// [`make_sag_free`] where the hair that rests on `colliders` (within
+    /// `SUPPORT_GAP` of a surface, for fibres of `radius`) is held by them.
+    pub fn make_sag_free_supported(
+        &mut self,
+        gravity: [f32; 3],
+        colliders: &ColliderSet,
+        radius: f32,
+    ) -> SagFreeReport {
         let mut report = SagFreeReport::default();
         if self.material.model != Model::Physical {
             return report;
         }
+        let prepared = colliders.prepare(radius + SUPPORT_GAP);
+        // The outward normal and friction of the surface a vertex rests on.
+        let support = |p: V3| {
+            if prepared.is_empty() {
+                return None;
+            }
+            let contact =
+                super::colliders::project_contact(&prepared, p, None, radius + SUPPORT_GAP, 0.0);
+            contact.normal.map(|n| (d3(n), contact.friction as f64))
+        };
         let g = d3(gravity);
         let density = self.material.density as f64;
         let youngs = self.material.youngs_modulus as f64;
@@ -176,17 +237,40 @@ impl StrandSet {
             );
             // From the tip: the weight below each edge and the torque on
             // each frame; then the joint's force on its Darboux vector.
-            let mut below = 0.0f64; // mass of the vertices below edge k
+            // The force edge k carries: the weight of the vertices below
+            // it less what surfaces hold of it.
+            let mut force = [0.0f64; 3];
             let mut torque = [0.0f64; 3];
             let mut stretch = 0.0f64;
             for k in (0..m).rev() {
                 let r = &self.radii[first + k..];
                 // Vertex k + 1 gets half of edges k and k + 1.
-                below += 0.5 * segment_mass(density, r[0], r[1], lengths[k] as f64);
+                let mut mass = 0.5 * segment_mass(density, r[0], r[1], lengths[k] as f64);
                 if k + 1 < m {
-                    below += 0.5 * segment_mass(density, r[1], r[2], lengths[k + 1] as f64);
+                    mass += 0.5 * segment_mass(density, r[1], r[2], lengths[k + 1] as f64);
                 }
-                let force = [g[0] * below, g[1] * below, g[2] * below];
+                force = std::array::from_fn(|i| force[i] + g[i] * mass);
+                // A vertex resting on a surface hands it the load that
+                // presses into it, and as much of the rest as Coulomb's
+                // friction holds; the contacts along the rest take the
+                // moment of the hair below (a strand lying on the head is
+                // not a cantilever). What they cannot hold goes on up the
+                // strand as tension.
+                if let Some((n, mu)) = support(self.positions[first + k + 1]) {
+                    let pressing = dot(force, n);
+
+                    if pressing < 0.0 {
+                        let tangential: D3 = std::array::from_fn(|i| force[i] - pressing * n[i]);
+                        let size = dot(tangential, tangential).sqrt();
+                        let kept = if size > 0.0 {
+                            (1.0 - mu * -pressing / size).max(0.0)
+                        } else {
+                            0.0
+                        };
+                        force = tangential.map(|t| t * kept);
+                        torque = [0.0; 3];
+                    }
+                }
                 let edge = d3(math::sub(
                     self.positions[first + k + 1],
                     self.positions[first + k],
@@ -221,7 +305,13 @@ impl StrandSet {
                 scratch.omega[k] = omega;
             }
             report.max_stretch = report.max_stretch.max(stretch);
+            report.groomed.push(GroomedRest {
+                strand,
+                root: self.roots[strand].rest,
+                memories: self.joints[first..end].iter().map(|j| j.memories).collect(),
+            });
             // Rest = Omega - A tau, A tridiagonal over the joints.
+            let mut limited = false;
             for k in 0..m {
                 let c = &scratch.compliance[k];
                 let diag = [c.bend, c.bend, c.twist];
@@ -241,6 +331,16 @@ impl StrandSet {
                     }
                     rest[i] -= a_tau;
                 }
+                // A bounded change: where the balance needs more, the
+                // strand is held as far as it allows and counted.
+                let change: D3 = std::array::from_fn(|i| rest[i] - scratch.omega[k][i]);
+                let size = dot(change, change).sqrt();
+                if size > MAX_CHANGE {
+                    rest = std::array::from_fn(|i| {
+                        scratch.omega[k][i] + change[i] * MAX_CHANGE / size
+                    });
+                    limited = true;
+                }
                 let size = dot(rest, rest).sqrt();
                 if size > MAX_REST {
                     rest = rest.map(|v| v * MAX_REST / size);
@@ -254,6 +354,9 @@ impl StrandSet {
                     report.unheld_joints += 1;
                 }
             }
+            if limited {
+                report.limited.push(strand);
+            }
             report.strands += 1;
         }
         report
@@ -265,22 +368,48 @@ impl StrandSet {
         &mut self,
         parameters: &SolverParameters,
     ) -> Result<SagFreeReport, SimError> {
-        let mut report = self.make_sag_free(parameters.gravity);
-        self.probe_sag_free(parameters, &mut report)?;
+        self.make_sag_free_with(parameters, &ColliderSet::new())
+    }
+
+    /// The sag-free start on hair that rests on `colliders` (their poses at
+    /// the start: the head), then the stability probe against them.
+    pub fn make_sag_free_with(
+        &mut self,
+        parameters: &SolverParameters,
+        colliders: &ColliderSet,
+    ) -> Result<SagFreeReport, SimError> {
+        let mut report =
+            self.make_sag_free_supported(parameters.gravity, colliders, parameters.hair_radius);
+        self.probe_sag_free(parameters, colliders, &mut report)?;
         Ok(report)
     }
 
     /// The stability probe alone, on strands `make_sag_free` solved (its
     /// `report`): a simulation of `PROBE_SECONDS`, so the bake runs it and
-    /// `validate`, which simulates nothing, does not.
+    /// `validate`, which simulates nothing, does not. The strands that
+    /// cannot stand get their groomed rest shape back: they start as with
+    /// `sag_free = false`, so the start never leaves a strand worse off.
     pub fn probe_sag_free(
-        &self,
+        &mut self,
         parameters: &SolverParameters,
+        colliders: &ColliderSet,
         report: &mut SagFreeReport,
     ) -> Result<(), SimError> {
-        if report.strands > 0 {
-            report.unstable = self.unstable_standing(parameters)?;
+        if report.strands == 0 {
+            return Ok(());
         }
+        report.unstable = self.unstable_standing(parameters, colliders)?;
+        for groomed in &report.groomed {
+            if report.unstable.binary_search(&groomed.strand).is_err() {
+                continue;
+            }
+            self.roots[groomed.strand].rest = groomed.root;
+            let first = self.offsets[groomed.strand];
+            for (joint, memories) in self.joints[first..].iter_mut().zip(&groomed.memories) {
+                joint.memories = *memories;
+            }
+        }
+        report.groomed = Vec::new();
         Ok(())
     }
 
@@ -288,7 +417,11 @@ impl StrandSet {
     /// length stands alone for `PROBE_SECONDS` after a push of
     /// `PROBE_SPEED` on every free vertex; the strands that move
     /// `PROBE_DRIFT` or more, in order.
-    fn unstable_standing(&self, parameters: &SolverParameters) -> Result<Vec<usize>, SimError> {
+    fn unstable_standing(
+        &self,
+        parameters: &SolverParameters,
+        colliders: &ColliderSet,
+    ) -> Result<Vec<usize>, SimError> {
         let g = d3(parameters.gravity);
         let g = dot(g, g).sqrt();
         if g == 0.0 {
@@ -340,11 +473,10 @@ impl StrandSet {
             ..*parameters
         };
         let mut solver = Solver::new(lone)?;
-        let colliders = ColliderSet::new();
         let start = probe.positions.clone();
         let mut moved = vec![false; self.strand_count()];
         for _ in 0..(PROBE_SECONDS / lone.dt).ceil() as usize {
-            solver.step(&mut probe, &colliders, &Environment::default())?;
+            solver.step(&mut probe, colliders, &Environment::default())?;
             for &strand in &probed {
                 let range = probe.offsets[strand]..probe.offsets[strand + 1];
                 moved[strand] |= range

@@ -13,6 +13,13 @@
 //! 5. `update_bonds` (bonds): the bond update (17);
 //! 6. `commit` (forces).
 //!
+//! The physical model's step is backward Euler (the solve balances the
+//! forces against the inertia at the step's end, velocities come from the
+//! change): stable for hair's stiff stretch/shear at any `dt` and exact in
+//! statics, but it damps a mode of angular frequency `w` by about
+//! `exp(-pi w dt)` a cycle on top of `damping` (docs/model.md "Time
+//! integration", measured by `backward_euler_damps_the_released_hair_as_documented`).
+//!
 //! Strands run in parallel; each works on a cache-resident copy of its
 //! state and commits it only if it is finite. With the phase clock on
 //! (`Solver::set_phase_clock`) each phase's time is added up for the
@@ -337,6 +344,16 @@ impl Solver {
 
     /// Changes the settings from the next step on (a stage may damp more,
     /// iterate more, switch hair-hair off...).
+    /// The contacts between hairs (with Coulomb friction) the last step
+    /// found, each counted once from each of its two strands: 0 without
+    /// hair-hair friction.
+    pub fn hair_contact_count(&self) -> usize {
+        match self.parameters.hair_friction {
+            Some(mu) if mu > 0.0 => self.contacts.count(),
+            _ => 0,
+        }
+    }
+
     pub fn set_parameters(&mut self, parameters: SolverParameters) -> Result<(), SimError> {
         parameters.check()?;
         self.parameters = parameters;

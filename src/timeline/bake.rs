@@ -401,11 +401,6 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         .get_ref()
         .iter()
         .any(|s| *s.kind.get_ref() != StageKind::Wind);
-    let sag_free = if timeline.file.solver.sag_free && !continues && rod_solver {
-        Some(strands.make_sag_free(parameters.gravity))
-    } else {
-        None
-    };
     let mut colliders = ColliderSet::new();
     for c in &timeline.file.colliders {
         let shape = shape_of(timeline, c.shape.get_ref())?;
@@ -421,6 +416,15 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
                 })?;
         colliders.insert(collider);
     }
+    let sag_free = if timeline.file.solver.sag_free && !continues && rod_solver {
+        Some(strands.make_sag_free_supported(
+            parameters.gravity,
+            &start_colliders(timeline, &colliders),
+            parameters.hair_radius,
+        ))
+    } else {
+        None
+    };
     check_preview_color(timeline, &groom)?;
     let fibre_radius = super::fibre::fibre_radius(timeline, &groom, strands.radii());
     Ok(Prepared {
@@ -433,6 +437,26 @@ pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepar
         sag_free,
         fibre_radius,
     })
+}
+
+/// The colliders the groom rests on at the start (the sag-free start's
+/// supports): those in every stage and those the first stage lists, posed
+/// at time 0.
+fn start_colliders(timeline: &Timeline, colliders: &ColliderSet) -> ColliderSet {
+    let first = timeline.file.stages.get_ref().first();
+    let mut start = ColliderSet::new();
+    for (collider, spec) in colliders.colliders.iter().zip(&timeline.file.colliders) {
+        let listed = first.is_some_and(|stage| {
+            stage
+                .colliders
+                .iter()
+                .any(|n| n.get_ref() == spec.name.get_ref())
+        });
+        if spec.active == ColliderActivity::Always || listed {
+            start.insert(collider.clone());
+        }
+    }
+    start
 }
 
 /// Refuses a `[preview] color` that names no attribute of the snapshots
@@ -856,7 +880,7 @@ impl<'a> BakeRun<'a> {
         let Prepared {
             groom,
             render,
-            strands,
+            mut strands,
             colliders,
             parameters,
             seed,
@@ -864,7 +888,8 @@ impl<'a> BakeRun<'a> {
             fibre_radius,
         } = prepare(timeline, options.seed)?;
         if let Some(sag_free) = &mut sag_free {
-            strands.probe_sag_free(&parameters, sag_free)?;
+            let start = start_colliders(timeline, &colliders);
+            strands.probe_sag_free(&parameters, &start, sag_free)?;
         }
         // What the reader left out of the source, then what the exports
         // must change.

@@ -355,9 +355,11 @@ fn no_output_holds_a_value_that_overflows_in_the_files_units() {
             "--units",
             "cm",
         ],
-        1,
+        2,
     );
+    // Bad input, found before writing (it was exit 1, from the exporter).
     assert!(stderr.contains("not finite"), "{stderr}");
+    assert!(stderr.contains("32-bit floats"), "{stderr}");
     assert!(!dir.path("big.abc").exists());
     let text = timeline(
         "[[export]]\npath = \"anim.abc\"\nwhat = \"animated\"\nunits = \"cm\"\n\

@@ -254,7 +254,8 @@ fn blender_usda_imports_every_curve_with_its_transform() {
             "up_axis": "Z",
             "time_samples": 0,
             "widths": "vertex",
-            "primvars": {"tilt": "vertex", "group_id": "uniform"},
+            // group_id is the reader's, made up from the prims: not written.
+            "primvars": {"tilt": "vertex"},
         }),
     );
 }
@@ -312,13 +313,16 @@ fn usd_core_file_converts_to_valid_usd() {
         assert_eq!(back["vertices"], 204, "{name}");
         assert_eq!(back["frames"], 3, "{name}");
         if name.ends_with(".usda") {
-            // The two bases stay two prims, animated too: nothing converted.
+            // The two bases stay two prims, animated too, at the source's
+            // paths (/Root/Child/Curves, /Root/Other): nothing converted.
             let text = std::fs::read_to_string(dir.path(name)).unwrap();
-            for prim in ["Strands_linear", "Strands_bspline"] {
-                assert!(
-                    text.contains(&format!("def BasisCurves \"{prim}\"")),
-                    "{prim}"
-                );
+            for prim in [
+                "Xform \"Root\"",
+                "Xform \"Child\"",
+                "BasisCurves \"Curves\"",
+                "BasisCurves \"Other\"",
+            ] {
+                assert!(text.contains(&format!("def {prim}")), "{prim}");
             }
         }
         hand_to_validators(
@@ -338,7 +342,6 @@ fn usd_core_file_converts_to_valid_usd() {
                     "st": "uniform",
                     "level": "uniform",
                     "tint": "uniform",
-                    "group_id": "uniform",
                 },
             }),
         );
@@ -504,11 +507,11 @@ fn fixtures_convert_keeping_wrap_and_declared_types() {
             && text.contains("texCoord2f[] primvars:st"),
         "{text}"
     );
-    // Mixed curve types: one prim per type, each keeping its own.
+    // Mixed curve types: the source's prims, each keeping its own type.
     let text = std::fs::read_to_string(dir.path("mixed_types.usda")).unwrap();
     assert!(
-        text.contains("def BasisCurves \"Strands_linear\"")
-            && text.contains("def BasisCurves \"Strands_catmullRom\"")
+        text.contains("def BasisCurves \"Guides\"")
+            && text.contains("def BasisCurves \"Render\"")
             && text.contains("uniform token type = \"linear\"")
             && text.contains("uniform token basis = \"catmullRom\""),
         "{text}"
@@ -624,21 +627,21 @@ fn time_varying_topology_is_carried_by_inspect_and_convert() {
     }
 
     // A format of one topology: the first is written, with a warning.
-    let output = dir.run_ok(&["convert", source, "growing.abc"]);
+    let output = dir.run_ok(&["convert", source, "growing.glb"]);
     let stderr = String::from_utf8(output.stderr).unwrap();
     assert!(
-        stderr.contains("growing.abc: .abc cannot hold curve counts that change over time")
+        stderr.contains("growing.glb: .glb cannot hold curve counts that change over time")
             && stderr.contains("up to the change at 0.08333333333333333 s"),
         "{stderr}"
     );
-    let first = importers::read(&dir.path("growing.abc")).unwrap();
+    let first = importers::read(&dir.path("growing.glb")).unwrap();
     assert_eq!(first.vertex_count(), 4);
-    let message = dir.run_fail(&["convert", "--strict", source, "strict.abc"], 2);
+    let message = dir.run_fail(&["convert", "--strict", source, "strict.glb"], 2);
     assert!(
-        message.contains("--strict: strict.abc: .abc cannot hold"),
+        message.contains("--strict: strict.glb: .glb cannot hold"),
         "{message}"
     );
-    assert!(!dir.path("strict.abc").exists());
+    assert!(!dir.path("strict.glb").exists());
     // --frame picks a frame across the sequence.
     dir.run_ok(&["convert", source, "second.obj", "--frame", "1"]);
     assert_eq!(

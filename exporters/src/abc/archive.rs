@@ -255,6 +255,11 @@ impl PropertyWriter {
         }
     }
 
+    /// The property's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// Number of samples set so far.
     pub fn sample_count(&self) -> u32 {
         self.next_sample

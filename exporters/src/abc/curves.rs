@@ -8,6 +8,10 @@
 //! Alembic reader assumes: the groom is rotated to Y up before writing. The
 //! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
 
+mod sequence;
+
+pub use sequence::write_sequence;
+
 use super::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter, TimeSampling};
 use crate::{AnimationOptions, AttributeSet, ExportError, FrameWriter};
 use groom::{AtomicFile, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
@@ -95,6 +99,9 @@ struct CurvesExport {
     /// The time-varying attributes every frame carries (the first sets them).
     animated: Option<Vec<String>>,
     samples: usize,
+    /// The next sample of `fixed` is already set (a new topology,
+    /// [`sequence`]), not a repeat.
+    fixed_given: bool,
     positions: PropertyWriter,
     bounds: PropertyWriter,
     vertex_count: usize,
@@ -231,6 +238,68 @@ fn bounds_bytes(points: &[[f32; 3]]) -> Vec<u8> {
         .collect()
 }
 
+/// One of the curves' own properties and its value for a groom.
+struct FixedSample {
+    name: &'static str,
+    metadata: String,
+    kind: PropertyKind,
+    pod: Pod,
+    extent: u8,
+    bytes: Vec<u8>,
+}
+
+/// `nVertices`, `curveBasisAndType`, `uv` and `width` of a groom, in the
+/// order they are written.
+fn fixed_samples(groom: &Groom) -> Vec<FixedSample> {
+    let counts: Vec<u8> = groom
+        .strand_vertex_counts
+        .iter()
+        .flat_map(|&c| (c as i32).to_le_bytes())
+        .collect();
+    let mut out = vec![
+        FixedSample {
+            name: "nVertices",
+            metadata: String::new(),
+            kind: PropertyKind::Array,
+            pod: Pod::I32,
+            extent: 1,
+            bytes: counts,
+        },
+        FixedSample {
+            name: "curveBasisAndType",
+            metadata: String::new(),
+            kind: PropertyKind::Scalar,
+            pod: Pod::U8,
+            extent: 4,
+            bytes: basis_and_type(groom.basis).to_vec(),
+        },
+    ];
+    if let Some(uv) = root_uv(groom) {
+        out.push(FixedSample {
+            name: "uv",
+            metadata: geom_param_metadata("uni", Pod::F32, 2),
+            kind: PropertyKind::Array,
+            pod: Pod::F32,
+            extent: 2,
+            bytes: f32_bytes(uv.iter().flatten().copied()),
+        });
+    }
+    if let Some(width) = width_attribute(groom) {
+        if let AttributeValues::Float(values) = &width.values {
+            let scope = scope_code(width.scope);
+            out.push(FixedSample {
+                name: "width",
+                metadata: geom_param_metadata(scope, Pod::F32, 1),
+                kind: PropertyKind::Array,
+                pod: Pod::F32,
+                extent: 1,
+                bytes: f32_bytes(values.iter().copied()),
+            });
+        }
+    }
+    out
+}
+
 impl CurvesExport {
     fn start(
         path: &Path,
@@ -271,6 +340,7 @@ impl CurvesExport {
             arbitrary_sources,
             animated: None,
             samples: 0,
+            fixed_given: false,
             positions: PropertyWriter::new(
                 "P",
                 metadata(&[("geoScope", "vtx"), ("interpretation", "point")]),
@@ -302,57 +372,17 @@ impl CurvesExport {
         sampling: u32,
     ) -> std::io::Result<Vec<PropertyWriter>> {
         let mut open = Vec::new();
-        let counts: Vec<u8> = groom
-            .strand_vertex_counts
-            .iter()
-            .flat_map(|&c| (c as i32).to_le_bytes())
-            .collect();
-        let mut n_vertices = PropertyWriter::new(
-            "nVertices",
-            String::new(),
-            PropertyKind::Array,
-            Pod::I32,
-            1,
-            sampling,
-        );
-        n_vertices.set_sample(archive, &counts)?;
-        open.push(n_vertices);
-        let mut basis = PropertyWriter::new(
-            "curveBasisAndType",
-            String::new(),
-            PropertyKind::Scalar,
-            Pod::U8,
-            4,
-            sampling,
-        );
-        basis.set_sample(archive, &basis_and_type(groom.basis))?;
-        open.push(basis);
-        if let Some(uv) = root_uv(groom) {
+        for fixed in fixed_samples(groom) {
             let mut property = PropertyWriter::new(
-                "uv",
-                geom_param_metadata("uni", Pod::F32, 2),
-                PropertyKind::Array,
-                Pod::F32,
-                2,
+                fixed.name,
+                fixed.metadata,
+                fixed.kind,
+                fixed.pod,
+                fixed.extent,
                 sampling,
             );
-            property.set_sample(archive, &f32_bytes(uv.iter().flatten().copied()))?;
+            property.set_sample(archive, &fixed.bytes)?;
             open.push(property);
-        }
-        if let Some(width) = width_attribute(groom) {
-            if let AttributeValues::Float(values) = &width.values {
-                let scope = scope_code(width.scope);
-                let mut property = PropertyWriter::new(
-                    "width",
-                    geom_param_metadata(scope, Pod::F32, 1),
-                    PropertyKind::Array,
-                    Pod::F32,
-                    1,
-                    sampling,
-                );
-                property.set_sample(archive, &f32_bytes(values.iter().copied()))?;
-                open.push(property);
-            }
         }
         Ok(open)
     }
@@ -532,11 +562,12 @@ impl CurvesExport {
             .map_err(io_error(&path))?;
         // Every property of the schema has a sample per frame; the ones that
         // do not change are stored once and repeated.
-        if self.samples > 0 {
+        if self.samples > 0 && !self.fixed_given {
             for property in &mut self.fixed {
                 property.repeat_previous();
             }
         }
+        self.fixed_given = false;
         for ((property, source), given) in self
             .arbitrary
             .iter_mut()

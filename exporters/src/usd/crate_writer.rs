@@ -11,7 +11,8 @@
 //! sections use the integer coding (deltas, 2-bit width codes) inside an LZ4
 //! block made only of literals, which any LZ4 decoder accepts.
 
-use super::{time_code, CurvesScene, PropertyValue, ROOT_PRIM};
+use super::structure::{children_of, default_prim, layout, roots, Step};
+use super::{time_code, CurvesPrim, CurvesScene, PropertyValue};
 use crate::{ExportError, FrameWriter};
 use groom::{AtomicFile, Frame};
 use std::collections::BTreeMap;
@@ -237,6 +238,57 @@ impl CrateWriter {
         Ok(value_rep(type_id::TIME_SAMPLES, false, false, start))
     }
 
+    /// The specs of curves prim `index` and its properties, under `parent`.
+    fn curves_specs(
+        &mut self,
+        layer: &mut Layer,
+        parent: u32,
+        index: usize,
+        prim: &CurvesPrim,
+        sampled: &BTreeMap<(usize, String), u64>,
+    ) -> Result<(), ExportError> {
+        let curves_path = layer.path(Some(parent), &prim.name, false);
+        let property_tokens: Vec<u32> = prim
+            .properties
+            .iter()
+            .map(|p| layer.token(&p.name))
+            .collect();
+        let basis_curves = layer.token("BasisCurves");
+        let fields = [
+            ("specifier", inlined(type_id::SPECIFIER, 0)),
+            ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
+            ("properties", self.write_token_vector(&property_tokens)?),
+        ];
+        layer.spec(curves_path, SPEC_PRIM, &fields);
+
+        for property in &prim.properties {
+            let path = layer.path(Some(curves_path), &property.name, true);
+            let type_name = layer.token(property.type_name);
+            let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
+            if property.uniform {
+                fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
+            }
+            if let Some(interpolation) = property.interpolation {
+                let token = layer.token(interpolation);
+                fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
+            }
+            let default = match &property.value {
+                PropertyValue::Token(token) => {
+                    Some(inlined(type_id::TOKEN, layer.token(token).into()))
+                }
+                _ => self.defaults.get(&(index, property.name.clone())).copied(),
+            };
+            if let Some(default) = default {
+                fields.push(("default", default));
+            }
+            if let Some(&rep) = sampled.get(&(index, property.name.clone())) {
+                fields.push(("timeSamples", rep));
+            }
+            layer.spec(path, SPEC_ATTRIBUTE, &fields);
+        }
+        Ok(())
+    }
+
     /// Writes the specs, the structural sections and the table of contents,
     /// then patches the bootstrap and renames the file into place.
     fn finish(mut self, scene: &CurvesScene, samples: Option<Samples>) -> Result<(), ExportError> {
@@ -260,7 +312,7 @@ impl CrateWriter {
 
         // The pseudo-root: stage metadata.
         let mut root_fields = Vec::new();
-        let root_token = layer.token(ROOT_PRIM);
+        let root_token = layer.token(default_prim(&scene.prims));
         root_fields.push(("defaultPrim", inlined(type_id::TOKEN, root_token.into())));
         let doc = layer.token("Written by groombake");
         strings.push(doc);
@@ -276,61 +328,46 @@ impl CrateWriter {
         }
         let up = layer.token(scene.up_axis);
         root_fields.push(("upAxis", inlined(type_id::TOKEN, up.into())));
-        root_fields.push(("primChildren", self.write_token_vector(&[root_token])?));
+        let root_tokens: Vec<u32> = roots(&scene.prims)
+            .into_iter()
+            .map(|name| layer.token(name))
+            .collect();
+        root_fields.push(("primChildren", self.write_token_vector(&root_tokens)?));
         let root_path = layer.path(None, "", false);
         layer.spec(root_path, SPEC_PSEUDO_ROOT, &root_fields);
 
-        // The Xform root.
-        let groom_path = layer.path(Some(root_path), ROOT_PRIM, false);
-        let curves_tokens: Vec<u32> = scene.prims.iter().map(|p| layer.token(&p.name)).collect();
-        let xform = layer.token("Xform");
-        let fields = [
-            ("specifier", inlined(type_id::SPECIFIER, 0)),
-            ("typeName", inlined(type_id::TOKEN, xform.into())),
-            ("primChildren", self.write_token_vector(&curves_tokens)?),
-        ];
-        layer.spec(groom_path, SPEC_PRIM, &fields);
-
-        // The curves prims and their properties.
-        for (index, prim) in scene.prims.iter().enumerate() {
-            let curves_path = layer.path(Some(groom_path), &prim.name, false);
-            let property_tokens: Vec<u32> = prim
-                .properties
-                .iter()
-                .map(|p| layer.token(&p.name))
-                .collect();
-            let basis_curves = layer.token("BasisCurves");
-            let fields = [
-                ("specifier", inlined(type_id::SPECIFIER, 0)),
-                ("typeName", inlined(type_id::TOKEN, basis_curves.into())),
-                ("properties", self.write_token_vector(&property_tokens)?),
-            ];
-            layer.spec(curves_path, SPEC_PRIM, &fields);
-
-            for property in &prim.properties {
-                let path = layer.path(Some(curves_path), &property.name, true);
-                let type_name = layer.token(property.type_name);
-                let mut fields = vec![("typeName", inlined(type_id::TOKEN, type_name.into()))];
-                if property.uniform {
-                    fields.push(("variability", inlined(type_id::VARIABILITY, 1)));
+        // The Xform parents and the curves prims, depth-first.
+        let mut open: Vec<(u32, Vec<String>)> = Vec::new();
+        for step in layout(&scene.prims) {
+            match step {
+                Step::Open { name, depth } => {
+                    open.truncate(depth);
+                    let parent = open.last().map_or(root_path, |(path, _)| *path);
+                    let xform_path = layer.path(Some(parent), &name, false);
+                    let mut prefix = open.last().map(|(_, p)| p.clone()).unwrap_or_default();
+                    prefix.push(name);
+                    let child_tokens: Vec<u32> = children_of(&scene.prims, &prefix)
+                        .into_iter()
+                        .map(|child| layer.token(child))
+                        .collect();
+                    let xform = layer.token("Xform");
+                    let fields = [
+                        ("specifier", inlined(type_id::SPECIFIER, 0)),
+                        ("typeName", inlined(type_id::TOKEN, xform.into())),
+                        ("primChildren", self.write_token_vector(&child_tokens)?),
+                    ];
+                    layer.spec(xform_path, SPEC_PRIM, &fields);
+                    open.push((xform_path, prefix));
                 }
-                if let Some(interpolation) = property.interpolation {
-                    let token = layer.token(interpolation);
-                    fields.push(("interpolation", inlined(type_id::TOKEN, token.into())));
+                Step::Close { depth } => open.truncate(depth),
+                Step::Curves { index, depth } => {
+                    let Some(prim) = scene.prims.get(index) else {
+                        continue;
+                    };
+                    open.truncate(depth);
+                    let parent = open.last().map_or(root_path, |(path, _)| *path);
+                    self.curves_specs(&mut layer, parent, index, prim, &sampled)?;
                 }
-                let default = match &property.value {
-                    PropertyValue::Token(token) => {
-                        Some(inlined(type_id::TOKEN, layer.token(token).into()))
-                    }
-                    _ => self.defaults.get(&(index, property.name.clone())).copied(),
-                };
-                if let Some(default) = default {
-                    fields.push(("default", default));
-                }
-                if let Some(&rep) = sampled.get(&(index, property.name.clone())) {
-                    fields.push(("timeSamples", rep));
-                }
-                layer.spec(path, SPEC_ATTRIBUTE, &fields);
             }
         }
 

@@ -48,6 +48,9 @@ pub(super) fn prim_values(
     };
     let mut out = Vec::with_capacity(frame.attributes.len());
     for attribute in &frame.attributes {
+        if prim.omitted.contains(&attribute.name) {
+            continue;
+        }
         let Some((_, property)) = prim
             .attribute_properties
             .iter()

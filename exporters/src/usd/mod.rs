@@ -10,6 +10,7 @@
 
 mod crate_writer;
 mod frame_values;
+mod structure;
 mod usda;
 
 use crate::{AnimationOptions, ExportError, FrameWriter};
@@ -104,11 +105,30 @@ impl PrimKey {
     }
 }
 
-/// A per-strand code attribute, if the groom has one of the right size.
+/// Whether a static or animated export of `groom` writes the prims it was
+/// read from, at their paths ([`structure`]).
+pub fn keeps_source_prims(groom: &Groom) -> bool {
+    structure::writable(groom)
+}
+
+/// A per-strand code attribute (`curve_basis`, `curve_wrap`), if the groom
+/// has one of the right size whose every code names a kind. Any other
+/// attribute of that name (a float, per vertex, an unknown code from a
+/// damaged or foreign file) is not a curve kind: it is written as the
+/// primvar it is, never turned into prims (an unknown code made a prim
+/// name USD refuses, and its values were lost).
 fn strand_codes<'g>(groom: &'g Groom, name: &str) -> Option<&'g [i32]> {
+    let kinds = if name == "curve_wrap" {
+        WRAPS.len()
+    } else {
+        BASES.len()
+    };
     match groom.attribute(name).map(|a| (&a.values, a.scope)) {
         Some((AttributeValues::Int(codes), Scope::Strand))
-            if codes.len() == groom.strand_count() =>
+            if codes.len() == groom.strand_count()
+                && codes
+                    .iter()
+                    .all(|&c| usize::try_from(c).is_ok_and(|c| c < kinds)) =>
         {
             Some(codes)
         }
@@ -184,6 +204,10 @@ pub fn write_sequence(
         return Err(invalid("a sequence needs at least one groom".into()));
     };
     let mut scene = CurvesScene::new(path, first, Some(DEFAULT_FPS))?;
+    if scene.prims.len() != 1 {
+        // One source prim keeps its path; several are written as one.
+        scene = CurvesScene::new_with(path, first, Some(DEFAULT_FPS), false)?;
+    }
     if scene.prims.len() != 1 {
         return Err(ExportError::Unsupported {
             file: path.to_path_buf(),
@@ -315,6 +339,13 @@ pub(crate) struct Timing {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct CurvesPrim {
     pub name: String,
+    /// The names of its `Xform` parents, root first (`Groom` for a groom
+    /// written flat; the source's for one whose prims are kept).
+    pub parents: Vec<String>,
+    /// Groom attributes this prim leaves out (a source prim did not have
+    /// them, or they stand for the prims themselves): not written, and
+    /// skipped in frames.
+    pub omitted: Vec<String>,
     /// Sorted by name; includes `points` and `extent` of the rest pose.
     pub properties: Vec<Property>,
     /// The groom's vertices this prim holds, in order (a frame's points
@@ -380,8 +411,26 @@ pub(crate) struct CurvesScene {
 
 impl CurvesScene {
     pub fn new(path: &Path, groom: &Groom, fps: Option<f64>) -> Result<CurvesScene, ExportError> {
+        Self::new_with(path, groom, fps, true)
+    }
+
+    /// The scene, with the source's prims when `keep_prims` and the groom
+    /// still has them, else flat.
+    fn new_with(
+        path: &Path,
+        groom: &Groom,
+        fps: Option<f64>,
+        keep_prims: bool,
+    ) -> Result<CurvesScene, ExportError> {
         let (groups, split_roles, mixed_curves) = prim_groups(groom);
-        let prims = if groups.len() <= 1 {
+        let source = if keep_prims {
+            structure::source_prims_of(path, groom)?
+        } else {
+            None
+        };
+        let prims = if let Some(prims) = source {
+            prims
+        } else if groups.len() <= 1 {
             vec![curves_prim(
                 path,
                 groom,
@@ -409,8 +458,14 @@ impl CurvesScene {
                 let mut part = groom.select_strands(&strands);
                 if mixed_curves {
                     part.basis = key.basis().unwrap_or(groom.basis);
-                    part.remove_attribute("curve_basis");
-                    part.remove_attribute("curve_wrap");
+                    // The codes the prims now say; an attribute of the
+                    // same name that is no code stays.
+                    if strand_codes(groom, "curve_basis").is_some() {
+                        part.remove_attribute("curve_basis");
+                    }
+                    if strand_codes(groom, "curve_wrap").is_some() {
+                        part.remove_attribute("curve_wrap");
+                    }
                     let wrap = key.wrap().unwrap_or("nonperiodic");
                     part.provenance
                         .metadata
@@ -598,6 +653,8 @@ fn curves_prim(
     properties.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(CurvesPrim {
         name,
+        parents: vec![ROOT_PRIM.to_string()],
+        omitted: Vec::new(),
         properties,
         vertex_ranges,
         strand_ranges,
@@ -700,7 +757,7 @@ fn unique_name(properties: &[Property], name: String) -> String {
 }
 
 /// A valid USD identifier: letters, digits and `_`, not starting with a digit.
-fn identifier(name: &str) -> String {
+pub(crate) fn identifier(name: &str) -> String {
     let mut out: String = name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })

@@ -7,7 +7,8 @@
 //! extents. `finish` writes the header and copies the spill file after it.
 //! Memory stays at one frame plus one extent per frame.
 
-use super::{time_code, CurvesPrim, CurvesScene, Property, PropertyValue, ROOT_PRIM};
+use super::structure::{default_prim, layout, Step};
+use super::{time_code, CurvesPrim, CurvesScene, Property, PropertyValue};
 use crate::{ExportError, FrameWriter};
 use groom::{AtomicFile, Frame};
 use std::fmt::Write as _;
@@ -25,31 +26,62 @@ pub(super) fn write_static(path: &Path, scene: &CurvesScene) -> Result<(), Expor
             .copied()
             .zip(scene.codes.last().copied());
         file.write_all(header(scene, range).as_bytes())?;
-        for prim in &scene.prims {
-            file.write_all(prim_opening(prim).as_bytes())?;
-            write_properties(&mut file, prim, &scene.codes)?;
-            file.write_all(PRIM_CLOSING)?;
+        for step in layout(&scene.prims) {
+            match step {
+                Step::Curves { index, depth } => {
+                    let Some(prim) = scene.prims.get(index) else {
+                        continue;
+                    };
+                    file.write_all(prim_opening(prim, depth).as_bytes())?;
+                    write_properties(&mut file, prim, &scene.codes)?;
+                    file.write_all(closing(depth).as_bytes())?;
+                }
+                step => file.write_all(xform_step(&step).as_bytes())?,
+            }
         }
-        file.write_all(ROOT_CLOSING)
+        Ok(())
     };
     write().map_err(io_error)?;
     file.commit().map_err(io_error)
 }
 
-/// Closes a curves prim.
-const PRIM_CLOSING: &[u8] = b"    }\n";
-/// Closes the root.
-const ROOT_CLOSING: &[u8] = b"}\n";
-
-fn prim_opening(prim: &CurvesPrim) -> String {
-    format!("    def BasisCurves \"{}\"\n    {{\n", prim.name)
+/// Closes a prim at `depth` (0: a root prim).
+fn closing(depth: usize) -> String {
+    format!("{}}}\n", indent(depth))
 }
 
-/// Stage metadata and the opening of the root prim; `range`
+fn indent(depth: usize) -> String {
+    "    ".repeat(depth)
+}
+
+/// Opens a curves prim at `depth`. Its properties are indented as at depth
+/// 1 whatever its depth: text only, USD reads them the same.
+fn prim_opening(prim: &CurvesPrim, depth: usize) -> String {
+    let pad = indent(depth);
+    format!("{pad}def BasisCurves \"{}\"\n{pad}{{\n", prim.name)
+}
+
+/// The text of opening or closing an `Xform` parent.
+fn xform_step(step: &Step) -> String {
+    match step {
+        Step::Open { name, depth } => {
+            let pad = indent(*depth);
+            format!("{pad}def Xform \"{name}\"\n{pad}{{\n")
+        }
+        Step::Close { depth } => closing(*depth),
+        Step::Curves { .. } => String::new(),
+    }
+}
+
+/// Stage metadata; `range`
 /// is the first and last time code of an animated export.
 fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     let mut header = String::from("#usda 1.0\n(\n");
-    let _ = writeln!(header, "    defaultPrim = \"{ROOT_PRIM}\"");
+    let _ = writeln!(
+        header,
+        "    defaultPrim = \"{}\"",
+        default_prim(&scene.prims)
+    );
     header.push_str("    doc = \"Written by groombake\"\n");
     if let (Some(timing), Some((start, end))) = (scene.timing, range) {
         let _ = writeln!(header, "    endTimeCode = {}", Num(end));
@@ -62,7 +94,6 @@ fn header(scene: &CurvesScene, range: Option<(f64, f64)>) -> String {
     }
     let _ = writeln!(header, "    upAxis = \"{}\"", scene.up_axis);
     header.push_str(")\n\n");
-    let _ = writeln!(header, "def Xform \"{ROOT_PRIM}\"\n{{");
     header
 }
 
@@ -246,9 +277,7 @@ impl AnimatedUsda {
         for (index, prim) in scene.prims.iter().enumerate() {
             let mut spill = SpillFile::create(path, &index.to_string()).map_err(io_error)?;
             let writer = spill.writer().map_err(io_error)?;
-            writer
-                .write_all(prim_opening(prim).as_bytes())
-                .and_then(|()| write_properties(writer, prim, &[]))
+            write_properties(writer, prim, &[])
                 .and_then(|()| writer.write_all(b"        point3f[] points.timeSamples = {\n"))
                 .map_err(io_error)?;
             spills.push(spill);
@@ -350,12 +379,30 @@ impl FrameWriter for AnimatedUsda {
         let mut file = AtomicFile::create(&this.path).map_err(io_error)?;
         file.write_all(header(&this.scene, Some((start, end))).as_bytes())
             .map_err(io_error)?;
-        for ((mut spill, extents), attributes) in this
+        let mut bodies: Vec<_> = this
             .spills
             .into_iter()
             .zip(&this.extents)
             .zip(this.attribute_spills)
-        {
+            .map(Some)
+            .collect();
+        for step in layout(&this.scene.prims) {
+            let (index, depth) = match step {
+                Step::Curves { index, depth } => (index, depth),
+                step => {
+                    file.write_all(xform_step(&step).as_bytes())
+                        .map_err(io_error)?;
+                    continue;
+                }
+            };
+            let (Some(prim), Some(Some(((mut spill, extents), attributes)))) = (
+                this.scene.prims.get(index),
+                bodies.get_mut(index).map(Option::take),
+            ) else {
+                continue;
+            };
+            file.write_all(prim_opening(prim, depth).as_bytes())
+                .map_err(io_error)?;
             let mut tail = String::from("        }\n        float3[] extent.timeSamples = {\n");
             for (code, extent) in this.codes.iter().zip(extents) {
                 let _ = write!(tail, "            {}: ", Num(*code));
@@ -375,9 +422,9 @@ impl FrameWriter for AnimatedUsda {
                 io::copy(&mut body, &mut file).map_err(io_error)?;
                 file.write_all(b"        }\n").map_err(io_error)?;
             }
-            file.write_all(PRIM_CLOSING).map_err(io_error)?;
+            file.write_all(closing(depth).as_bytes())
+                .map_err(io_error)?;
         }
-        file.write_all(ROOT_CLOSING).map_err(io_error)?;
         file.commit().map_err(io_error)
     }
 }

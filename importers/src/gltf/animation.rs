@@ -25,7 +25,7 @@ pub(super) struct Piece {
 /// Whether a channel animates morph-target weights. Paths other than the
 /// four glTF defines are allowed by its schema (extensions such as
 /// KHR_animation_pointer use them): such channels animate nothing here.
-fn drives_weights(channel: &json::animation::Channel) -> bool {
+pub(super) fn drives_weights(channel: &json::animation::Channel) -> bool {
     matches!(
         channel.target.path,
         Checked::Valid(Property::MorphTargetWeights)

@@ -29,6 +29,49 @@ pub(super) struct Document<'a> {
     /// Bytes accessors may still decode: a few times the bytes present, so
     /// that many references to one large accessor cannot multiply it.
     decode_budget: Cell<u64>,
+    /// Animation channels with no `target.node` (animation, channel, path):
+    /// glTF allows them for an extension's target (KHR_animation_pointer);
+    /// the `gltf-json` types require a node, so they are given node 0 and
+    /// an unknown path, which animates nothing here.
+    pub nodeless_channels: Vec<NodelessChannel>,
+}
+
+/// An animation channel with no `target.node`: animation, channel, path.
+pub(super) type NodelessChannel = (usize, usize, String);
+
+/// The document of JSON that `gltf-json` refused only because animation
+/// channels have no `target.node`, with those channels listed; `None` when
+/// it has none or is still refused with them filled in.
+fn nodeless_channels(json_bytes: &[u8]) -> Option<(json::Root, Vec<NodelessChannel>)> {
+    let mut value: serde_json::Value = serde_json::from_slice(json_bytes).ok()?;
+    let mut nodeless = Vec::new();
+    let animations = value.get_mut("animations")?.as_array_mut()?;
+    for (a, animation) in animations.iter_mut().enumerate() {
+        let Some(channels) = animation.get_mut("channels").and_then(|c| c.as_array_mut()) else {
+            continue;
+        };
+        for (c, channel) in channels.iter_mut().enumerate() {
+            let Some(target) = channel.get_mut("target").and_then(|t| t.as_object_mut()) else {
+                continue;
+            };
+            if target.contains_key("node") {
+                continue;
+            }
+            let path = target
+                .get("path")
+                .and_then(|p| p.as_str())
+                .unwrap_or("")
+                .to_string();
+            target.insert("node".into(), serde_json::json!(0));
+            target.insert("path".into(), serde_json::json!("(no node)"));
+            nodeless.push((a, c, path));
+        }
+    }
+    if nodeless.is_empty() {
+        return None;
+    }
+    let root = serde_json::from_value(value).ok()?;
+    Some((root, nodeless))
 }
 
 /// How many times over the file's bytes (and its buffers') the accessors
@@ -49,19 +92,23 @@ impl<'a> Document<'a> {
         } else {
             (bytes, None)
         };
-        let root: json::Root = serde_json::from_slice(json_bytes).map_err(|e| {
-            ImportError::malformed(
-                path,
-                Place::Line {
-                    line: e.line(),
-                    column: e.column(),
-                },
-                format!("invalid glTF JSON: {e}"),
-            )
-        })?;
+        let (root, nodeless_channels) = match serde_json::from_slice::<json::Root>(json_bytes) {
+            Ok(root) => (root, Vec::new()),
+            Err(e) => nodeless_channels(json_bytes).ok_or_else(|| {
+                ImportError::malformed(
+                    path,
+                    Place::Line {
+                        line: e.line(),
+                        column: e.column(),
+                    },
+                    format!("invalid glTF JSON: {e}"),
+                )
+            })?,
+        };
         let mut document = Document {
             path,
             root,
+            nodeless_channels,
             blob_of_buffer: Vec::new(),
             blobs: Vec::new(),
             decode_budget: Cell::new(0),

@@ -1,7 +1,9 @@
 //! glTF 2.0 (`.gltf` with embedded or external buffers, `.glb`). Strands are
 //! read from `LINE_STRIP` primitives (one strand each) and `LINES`
 //! primitives (consecutive segments that share an end vertex join into one
-//! strand); other primitives (a head mesh, points) are skipped by [`read`];
+//! strand); other primitives (a head mesh, points) are skipped by [`read`]
+//! and named in the groom's `provenance.losses`, as are animation channels
+//! other than the strands' morph-target weights ([`losses`]);
 //! [`read_triangles`] reads the triangle primitives instead, for colliders.
 //! The scene graph's transforms are applied. Morph-target animation becomes
 //! frames: frame k is the base pose plus the targets weighted by the k-th
@@ -24,6 +26,7 @@ mod accessors;
 mod animation;
 mod document;
 mod lines;
+mod losses;
 mod scene;
 #[cfg(test)]
 mod tests;
@@ -33,6 +36,7 @@ use crate::mesh::{Mesh, Triangles};
 use crate::ImportError;
 use animation::Piece;
 use document::Document;
+use gltf::json::validation::Checked;
 use groom::{Attribute, AttributeValues, Groom, Units, UpAxis};
 use lines::Lines;
 use std::collections::{BTreeMap, BTreeSet};
@@ -49,7 +53,7 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let document = Document::load(path, bytes)?;
-    let (decoded, pieces) = line_pieces(&document)?;
+    let (decoded, pieces, skipped) = line_pieces(&document)?;
     let mut groom = Groom {
         units: Units::METERS,
         up_axis: UpAxis::Y,
@@ -102,18 +106,35 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     }
     groom.frames = document.frames(&decoded, &pieces)?;
     groom.provenance.format = "gltf".into();
+    groom.provenance.losses.extend(
+        losses::skipped_primitives(&skipped)
+            .into_iter()
+            .chain(document.unread_channels(&pieces)),
+    );
     Ok(groom)
 }
 
-/// Every line primitive of the scene decoded once, and each of its
-/// instances with its world matrix.
-fn line_pieces(document: &Document) -> Result<(Vec<Lines>, Vec<Piece>), ImportError> {
+/// Every line primitive of the scene decoded once, each of its instances
+/// with its world matrix, and the scene's primitives that are not lines.
+type LinePieces = (Vec<Lines>, Vec<Piece>, Vec<losses::Skipped>);
+
+/// The scene's [`LinePieces`].
+fn line_pieces(document: &Document) -> Result<LinePieces, ImportError> {
     let mut pieces = Vec::new();
+    let mut skipped = Vec::new();
     let mut points = 0usize;
     let decoded = scene::walk_primitives(
         document,
         |mesh_index, mesh, primitive_index, primitive| {
-            document.lines(mesh_index, mesh, primitive_index, primitive)
+            let lines = document.lines(mesh_index, mesh, primitive_index, primitive)?;
+            if let (None, Checked::Valid(mode)) = (&lines, primitive.mode) {
+                skipped.push(losses::Skipped {
+                    mesh: mesh_index,
+                    primitive: primitive_index,
+                    mode,
+                });
+            }
+            Ok(lines)
         },
         |node_index, world, slot, lines| {
             points += lines.point_count();
@@ -134,7 +155,7 @@ fn line_pieces(document: &Document) -> Result<(Vec<Lines>, Vec<Piece>), ImportEr
             Ok(())
         },
     )?;
-    Ok((decoded, pieces))
+    Ok((decoded, pieces, skipped))
 }
 
 /// Attributes every line primitive has, with the same type, empty.

@@ -402,13 +402,31 @@ fn error_of(json: &str) -> String {
 }
 
 #[test]
-fn unknown_animation_target_path_is_ignored() {
+fn unknown_animation_target_path_is_read_as_a_loss() {
     // glTF's schema allows other paths (KHR_animation_pointer uses
     // "pointer"); the gltf crate's wrapper unwrapped them and panicked.
+    // The channel animates nothing groombake reads: named as a loss.
     let json = embedded().replacen(r#""path":"weights""#, r#""path":"pointer""#, 1);
     let groom = parse(Path::new("t.gltf"), json.as_bytes()).unwrap();
     assert_eq!(groom.strand_vertex_counts, vec![3, 2, 2]);
     assert!(groom.frames.is_empty());
+    assert_eq!(
+        groom.provenance.losses,
+        vec![
+            "1 animation channel(s) not read (frames are the strands' morph-target weights, \
+             from the first animation with them): \
+             /animations/0/channels/0 (a path glTF does not define of node 1)"
+                .to_string()
+        ]
+    );
+    // The weights channel it replaced is read with no loss.
+    let groom = parse(Path::new("t.gltf"), embedded().as_bytes()).unwrap();
+    assert!(!groom.frames.is_empty());
+    assert!(
+        groom.provenance.losses.is_empty(),
+        "{:?}",
+        groom.provenance.losses
+    );
 }
 
 #[test]

@@ -12,9 +12,13 @@
 //!
 //! Written here because no Rust crate composes USD; every arc is resolved
 //! relative to the layer that authors it, a layer is parsed once, and the
-//! depth and the number of composed prims are bounded.
+//! depth and the number of composed prims are bounded. Layer offsets of
+//! sublayers, references and payloads move the time samples they bring
+//! (`t * scale + offset`, composed through nested arcs); a crate file's
+//! sublayer offsets and a
+//! difference in `timeCodesPerSecond` between layers are not applied.
 
-use super::{Arc, ArcTarget, Prim, Specifier, Stage};
+use super::{Arc, ArcTarget, LayerOffset, Prim, Specifier, Stage};
 use crate::{ImportError, Place};
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
@@ -207,10 +211,11 @@ impl Composer {
         });
         let mut roots = tree(stage.prims, index);
         self.prims += roots.iter().map(count).sum::<usize>();
-        for (asset, place) in stage.sublayers {
+        for (asset, place, offset) in stage.sublayers {
             let arc = format!("subLayers @{asset}@");
             let sub = self.load(file, &asset, &arc, &place, depth + 1)?;
-            for node in self.layers[sub].roots.clone() {
+            for mut node in self.layers[sub].roots.clone() {
+                retime(&mut node, offset);
                 let name = node.prim.path.clone();
                 match roots.iter_mut().find(|r| r.prim.path == name) {
                     Some(existing) => merge(existing, node),
@@ -291,7 +296,8 @@ impl Composer {
         let arcs = std::mem::take(&mut node.arcs);
         for (arc, layer) in arcs {
             for target in &arc.targets {
-                let source = self.fetch(&arc, target, layer, depth)?;
+                let mut source = self.fetch(&arc, target, layer, depth)?;
+                retime(&mut source, target.offset);
                 merge(node, land(source, &node.prim.path));
             }
         }
@@ -367,6 +373,33 @@ impl Composer {
         self.check_budget(&from)?;
         self.resolve(&mut source, depth + 1)?;
         Ok(source)
+    }
+}
+
+/// Moves the time samples of a subtree a sublayer or an arc brings into
+/// the time of the layer that authors it (its layer offset).
+fn retime(node: &mut Node, offset: LayerOffset) {
+    if offset.is_identity() {
+        return;
+    }
+    for attribute in &mut node.prim.attributes {
+        for (code, _) in &mut attribute.samples {
+            *code = offset.apply(*code);
+        }
+        // A negative scale reverses them.
+        attribute.samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    // Arcs not yet followed bring their times through this offset too.
+    for (arc, _) in &mut node.arcs {
+        for target in &mut arc.targets {
+            target.offset = LayerOffset {
+                offset: offset.apply(target.offset.offset),
+                scale: target.offset.scale * offset.scale,
+            };
+        }
+    }
+    for child in &mut node.children {
+        retime(child, offset);
     }
 }
 

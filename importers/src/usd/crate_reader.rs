@@ -8,7 +8,7 @@
 //! about a thousand integers, by a decode budget of a few times the file's
 //! size. Errors name the byte offset and the section or value being read.
 
-use super::{Arc, ArcKind, ArcTarget, Prim, Specifier, Stage, UsdAttribute, Value};
+use super::{Arc, ArcKind, ArcTarget, LayerOffset, Prim, Specifier, Stage, UsdAttribute, Value};
 use crate::{ImportError, Place};
 use std::cell::Cell;
 use std::collections::BTreeMap;
@@ -877,16 +877,32 @@ impl<'a> CrateReader<'a> {
                 ArcTarget {
                     asset: None,
                     prim_path: path_at(offset)?,
+                    offset: LayerOffset::default(),
                 },
                 offset + 4,
             )),
             ArcItem::Reference | ArcItem::Payload => {
                 let asset = self.string(u64::from(self.u32_at(offset, what)?), offset)?;
                 let prim_path = path_at(offset + 4)?;
-                // Layer offsets (two doubles) are skipped, as in the text reader.
+                // The layer offset: two doubles, offset then scale.
                 let mut next = offset + 8;
+                let mut layer_offset = LayerOffset::default();
                 if item == ArcItem::Reference || self.at_least((0, 8, 0)) {
-                    self.slice(next, 16, what)?;
+                    let bytes = self.slice(next, 16, what)?;
+                    let double = |b: &[u8]| -> f64 {
+                        let mut raw = [0u8; 8];
+                        raw.copy_from_slice(b);
+                        f64::from_le_bytes(raw)
+                    };
+                    layer_offset = LayerOffset {
+                        offset: double(&bytes[..8]),
+                        scale: double(&bytes[8..16]),
+                    };
+                    if !(layer_offset.offset.is_finite() && layer_offset.scale.is_finite()) {
+                        return Err(
+                            self.error(next, format!("{what}: a layer offset is not finite"))
+                        );
+                    }
                     next += 16;
                 }
                 if item == ArcItem::Reference {
@@ -902,6 +918,7 @@ impl<'a> CrateReader<'a> {
                 let target = ArcTarget {
                     asset: (!asset.is_empty()).then_some(asset),
                     prim_path,
+                    offset: layer_offset,
                 };
                 Ok((target, next))
             }
@@ -1189,16 +1206,22 @@ impl<'a> CrateReader<'a> {
                                 stage.default_prim =
                                     value()?.text().and_then(|t| t.first().cloned())
                             }
+                            // The crate calls the layer's doc `documentation`.
+                            "documentation" => {
+                                stage.doc = value()?.text().and_then(|t| t.first().cloned())
+                            }
                             "subLayers" => {
                                 let layers = value()?;
                                 let layers = layers.text().ok_or_else(|| {
                                     self.error(0, "subLayers is not a list of asset paths")
                                 })?;
-                                stage.sublayers.extend(
-                                    layers
-                                        .iter()
-                                        .map(|asset| (asset.clone(), Place::Path("/".into()))),
-                                );
+                                stage.sublayers.extend(layers.iter().map(|asset| {
+                                    (
+                                        asset.clone(),
+                                        Place::Path("/".into()),
+                                        LayerOffset::default(),
+                                    )
+                                }));
                             }
                             _ => {}
                         }

@@ -15,6 +15,7 @@ mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
 use crate::{ImportError, Place};
+use groom::source_prims::{set_source_prims, SourcePrim};
 use groom::{Attribute, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::Path;
 
@@ -174,6 +175,7 @@ fn stage_at(stage: &Stage, code: f64) -> Stage {
         default_prim: stage.default_prim.clone(),
         sublayers: Vec::new(),
         notes: stage.notes.clone(),
+        doc: stage.doc.clone(),
     }
 }
 
@@ -266,6 +268,35 @@ pub(crate) enum Value {
 pub(crate) struct ArcTarget {
     pub asset: Option<String>,
     pub prim_path: Option<String>,
+    /// The layer offset the arc applies to the times it brings.
+    pub offset: LayerOffset,
+}
+
+/// A layer offset (`SdfLayerOffset`): a time `t` of the layer an arc or a
+/// sublayer brings is `t * scale + offset` in the layer that authors it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LayerOffset {
+    pub offset: f64,
+    pub scale: f64,
+}
+
+impl Default for LayerOffset {
+    fn default() -> LayerOffset {
+        LayerOffset {
+            offset: 0.0,
+            scale: 1.0,
+        }
+    }
+}
+
+impl LayerOffset {
+    pub(crate) fn is_identity(self) -> bool {
+        self == LayerOffset::default()
+    }
+
+    pub(crate) fn apply(self, code: f64) -> f64 {
+        code * self.scale + self.offset
+    }
 }
 
 /// The kinds of composition arcs a prim can have.
@@ -402,11 +433,19 @@ pub(crate) struct Stage {
     pub prims: Vec<Prim>,
     /// `defaultPrim`: the prim a reference without a prim path brings.
     pub default_prim: Option<String>,
-    /// `subLayers`, strongest first, with where they are authored.
-    pub sublayers: Vec<(String, Place)>,
+    /// `subLayers`, strongest first, with where they are authored and
+    /// their layer offsets.
+    pub sublayers: Vec<(String, Place, LayerOffset)>,
     /// What the reader passed over (variant sets), for the groom's info.
     pub notes: Vec<String>,
+    /// The layer's `doc` (groombake writes "Written by groombake"); `None`
+    /// for a stage composed from several layers.
+    pub doc: Option<String>,
 }
+
+/// The `doc` of the layers groombake writes: their prims split one groom
+/// by curve kind and role, never into groups of the source.
+const GROOMBAKE_DOC: &str = "Written by groombake";
 
 /// What an element of a USD value type holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1039,21 +1078,26 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
         }
     }
 
-    // Each curves prim's composed path and strand count, for `inspect`.
-    let prims: Vec<String> = sets
+    // Each curves prim's composed path and strand count (for `inspect`,
+    // and for the USD writer to write the prims again), with the
+    // attributes each lacks, filled in below.
+    let mut source_prims: Vec<SourcePrim> = sets
         .iter()
-        .map(|(path, set)| format!("{path} {}", set.counts.len()))
+        .map(|(path, set)| SourcePrim {
+            path: path.clone(),
+            strands: set.counts.len(),
+            missing: Vec::new(),
+        })
         .collect();
-    groom
-        .provenance
-        .metadata
-        .insert(groom::PRIMS_KEY.into(), prims.join("\n"));
 
     let several = sets.len() > 1;
     let mut group_ids = Vec::new();
     let mut basis_codes = Vec::new();
     let mut wrap_codes = Vec::new();
     let mut notes = stage.notes.clone();
+    // Zeros for a prim that lacks an attribute: losses, unless the prims
+    // are written back as they were (`groom::source_prims::ZERO_FILLED_KEY`).
+    let mut zero_filled: Vec<String> = Vec::new();
     for (group, (path, set)) in sets.into_iter().enumerate() {
         let vertices_before = groom.points.len();
         let strands_before = groom.strand_vertex_counts.len();
@@ -1098,11 +1142,16 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                     }
                 }
                 None => {
+                    for earlier in source_prims.iter_mut().take(group) {
+                        earlier.missing.push(attribute.name.clone());
+                    }
                     if strands_before > 0 {
-                        groom.provenance.losses.push(format!(
+                        let loss = format!(
                             "the curves before {path} have no {}: 0 for their {strands_before} strands",
                             usd_name(&attribute.name)
-                        ));
+                        );
+                        groom.provenance.losses.push(loss.clone());
+                        zero_filled.push(loss);
                     }
                     let mut values = empty_like(&attribute.values, before);
                     append(&mut values, &attribute.values);
@@ -1141,11 +1190,16 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
             if missing > 0 {
                 let zeros = empty_like(&attribute.values, missing);
                 append(&mut attribute.values, &zeros);
-                groom.provenance.losses.push(format!(
+                if let Some(prim) = source_prims.get_mut(group) {
+                    prim.missing.push(attribute.name.clone());
+                }
+                let loss = format!(
                     "{path} has no {}: 0 for its {} strands",
                     usd_name(&attribute.name),
                     set.counts.len()
-                ));
+                );
+                groom.provenance.losses.push(loss.clone());
+                zero_filled.push(loss);
             }
         }
     }
@@ -1161,12 +1215,35 @@ pub(crate) fn to_groom(file: &Path, stage: &Stage) -> Result<Groom, ImportError>
                 .all(|(&guide, &group)| guide == (group == 0))
         });
     // Synthesised only where the file has none: a group_id primvar (as
-    // groombake writes it) is the source's own and is kept.
-    if several && !guides_then_render && groom.attribute("group_id").is_none() {
+    // groombake writes it) is the source's own and is kept. groombake's
+    // own prims are one groom split by curve kind (told by `curve_basis`
+    // and `curve_wrap`), not groups: a group_id there would be an
+    // attribute the groom it wrote never had.
+    // (Its split prims are `Strands...`; a groom written at its source's
+    // prim paths is read as that source was, group ids and all.)
+    let own_split = stage.doc.as_deref() == Some(GROOMBAKE_DOC)
+        && source_prims.iter().all(|prim| {
+            prim.path
+                .rsplit('/')
+                .next()
+                .is_some_and(|name| name.starts_with("Strands"))
+        });
+    if several && !guides_then_render && !own_split && groom.attribute("group_id").is_none() {
         groom.set_attribute(Attribute::per_strand(
             "group_id",
             AttributeValues::Int(group_ids),
         ));
+        groom.provenance.metadata.insert(
+            groom::source_prims::GROUP_ID_KEY.into(),
+            "synthesised".into(),
+        );
+    }
+    set_source_prims(&mut groom, &source_prims);
+    if !zero_filled.is_empty() {
+        groom.provenance.metadata.insert(
+            groom::source_prims::ZERO_FILLED_KEY.into(),
+            zero_filled.join("\n"),
+        );
     }
     if mixed {
         groom.set_attribute(Attribute::per_strand(

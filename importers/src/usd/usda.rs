@@ -4,7 +4,8 @@
 //! variant sets are parsed and skipped. Every error names line:column.
 
 use super::{
-    element_kind, Arc, ArcKind, ArcTarget, ElementKind, Prim, Specifier, Stage, UsdAttribute, Value,
+    element_kind, Arc, ArcKind, ArcTarget, ElementKind, LayerOffset, Prim, Specifier, Stage,
+    UsdAttribute, Value,
 };
 use crate::{ImportError, Place};
 use std::path::Path;
@@ -369,11 +370,14 @@ impl<'a> Parser<'a> {
                     "defaultPrim" => {
                         self.stage.default_prim = value.text().and_then(|t| t.first().cloned());
                     }
+                    "doc" => self.stage.doc = value.text().and_then(|t| t.first().cloned()),
                     "subLayers" => {
                         if let Value::Arcs(targets) = value {
                             for target in targets {
                                 if let Some(asset) = target.asset {
-                                    self.stage.sublayers.push((asset, at.place()));
+                                    self.stage
+                                        .sublayers
+                                        .push((asset, at.place(), target.offset));
                                 }
                             }
                         }
@@ -471,6 +475,7 @@ impl<'a> Parser<'a> {
             let mut target = ArcTarget {
                 asset: None,
                 prim_path: None,
+                offset: LayerOffset::default(),
             };
             if let Token::Asset(asset) = self.peek()? {
                 target.asset = Some(asset.clone());
@@ -491,8 +496,7 @@ impl<'a> Parser<'a> {
                 ));
             }
             if *self.peek()? == Token::Punct(b'(') {
-                let at = self.expect(b'(')?;
-                self.skip_until(b')', at, 0)?;
+                target.offset = self.layer_offset()?;
             }
             targets.push(target);
             if !list {
@@ -504,6 +508,46 @@ impl<'a> Parser<'a> {
             }
         }
         Ok(Value::Arcs(targets))
+    }
+
+    /// An arc's or a sublayer's `(offset = N; scale = N)`; other entries
+    /// are skipped.
+    fn layer_offset(&mut self) -> Result<LayerOffset, ImportError> {
+        self.expect(b'(')?;
+        let mut offset = LayerOffset::default();
+        loop {
+            if self.eat(b')')? {
+                break;
+            }
+            if self.eat(b';')? {
+                continue;
+            }
+            let (token, at) = self.next()?;
+            let key = match token {
+                Token::Ident(key) => key,
+                other => {
+                    return Err(self.error(
+                        at,
+                        format!("expected a layer offset entry, found {}", other.describe()),
+                    ))
+                }
+            };
+            self.expect(b'=')?;
+            let value = self.generic_value(0)?;
+            let number = match value {
+                Value::Numbers { data, .. } => data.first().copied(),
+                _ => None,
+            };
+            let slot = match key {
+                "offset" => &mut offset.offset,
+                "scale" => &mut offset.scale,
+                _ => continue,
+            };
+            *slot = number
+                .filter(|n| n.is_finite())
+                .ok_or_else(|| self.error(at, format!("layer {key} is not a finite number")))?;
+        }
+        Ok(offset)
     }
 
     /// Any value, interpreted only as far as a number or a string; lists,

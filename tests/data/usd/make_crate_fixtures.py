@@ -28,6 +28,9 @@ CRATE_COPIES = {
     "sublayer_main": ["sublayer_base"],
     "instancing": [],
     "inherits": [],
+    # A reference with a layer offset (offset 1, scale 2) in the crate's
+    # SdfReference encoding; it names the text layer_offset_curves.usda.
+    "layer_offset_reference": [],
 }
 
 
