@@ -46,8 +46,8 @@ enum Command {
     Preview(preview::PreviewArgs),
     /// Prints a shell completion script: `groombake completions bash > ...`.
     Completions(install::CompletionsArgs),
-    /// Prints the man page (roff): `groombake man > groombake.1`.
-    Man,
+    /// Prints the man page (roff): `groombake man > groombake.1`; `groombake man DIR` writes one per command.
+    Man(install::ManArgs),
     /// Bakes the jobs of a manifest (in parallel, a shard, resumed) or emits a farm script.
     Batch(batch::BatchArgs),
     /// Compares two grooms within a tolerance (exit 0 equal, 1 different).
@@ -207,7 +207,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a),
         Command::Preview(a) => preview::run(a),
         Command::Completions(a) => install::run_completions(a),
-        Command::Man => install::run_man(),
+        Command::Man(a) => install::run_man(a),
         Command::Diff(a) => diff::run(a),
         Command::Batch(a) => batch::run(a),
     }

@@ -184,3 +184,119 @@ fn release_profile_strips_debug_info_and_profiling_keeps_it() {
     assert_eq!(profiling["debug"].as_bool(), Some(true), "{profiling:?}");
     assert_eq!(profiling["strip"].as_str(), Some("none"), "{profiling:?}");
 }
+
+/// The commands `groombake --help` lists (clap's "Commands:" section).
+fn commands(dir: &TestDir) -> Vec<String> {
+    let help = String::from_utf8(dir.run_ok(&["--help"]).stdout).unwrap();
+    help.lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .filter(|c| c != "help")
+        .collect()
+}
+
+#[test]
+fn man_writes_a_page_for_every_command_that_groff_renders() {
+    let dir = TestDir::new();
+    let commands = commands(&dir);
+    assert!(commands.len() >= 10, "{commands:?}");
+    dir.run_ok(&["man", "pages"]);
+    let mut written: Vec<String> = std::fs::read_dir(dir.path("pages"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    written.sort();
+    let mut expected: Vec<String> = commands
+        .iter()
+        .map(|c| format!("groombake-{c}.1"))
+        .chain(["groombake.1".to_string()])
+        .collect();
+    expected.sort();
+    assert_eq!(written, expected);
+    for command in &commands {
+        let rendered = Command::new("groff")
+            .args(["-man", "-Tutf8", &format!("pages/groombake-{command}.1")])
+            .current_dir(dir.root())
+            .output()
+            .expect("groff is needed to check the man pages");
+        assert!(rendered.status.success(), "{command}");
+        let text = String::from_utf8_lossy(&rendered.stdout);
+        assert!(
+            text.contains(&format!("groombake-{command}")),
+            "{command}:\n{text}"
+        );
+        // Its own help text is on its page.
+        let help = String::from_utf8(dir.run_ok(&[command, "--help"]).stdout).unwrap();
+        let about = help.lines().next().unwrap().trim();
+        let first_words: String = about
+            .split_whitespace()
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert!(
+            text.split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+                .contains(&first_words),
+            "{command}: no {first_words:?} in:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn man_into_a_file_is_a_one_line_usage_error() {
+    let dir = TestDir::new();
+    std::fs::write(dir.path("taken"), "x").unwrap();
+    let stderr = dir.run_fail(&["man", "taken"], 2);
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("taken") && stderr.contains("not a folder"),
+        "{stderr}"
+    );
+}
+
+/// The README's completions line, run as written in a home that has never
+/// had bash completions (no `~/.local/share`).
+#[test]
+fn readme_completions_line_works_in_a_fresh_home() {
+    let dir = TestDir::new();
+    let readme = include_str!("../../README.md");
+    let line = readme
+        .lines()
+        .find(|l| l.contains("completions bash >"))
+        .expect("the README has a completions line");
+    let script = line
+        .trim()
+        .trim_start_matches('`')
+        .split('`')
+        .next()
+        .unwrap();
+    std::fs::create_dir(dir.path("home")).unwrap();
+    let bin = std::path::Path::new(env!("CARGO_BIN_EXE_groombake"))
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let run = Command::new("bash")
+        .args(["-c", script])
+        .env("HOME", dir.path("home"))
+        .env("PATH", path)
+        .output()
+        .expect("bash");
+    assert!(
+        run.status.success(),
+        "{script}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let written = std::fs::read_to_string(
+        dir.path("home/.local/share/bash-completion/completions/groombake"),
+    )
+    .unwrap();
+    assert!(written.contains("complete -F _groombake"), "{written}");
+}
