@@ -83,43 +83,81 @@ pub(crate) fn crossings(from: [i32; 3], to: [i32; 3]) -> i64 {
 /// edge.)
 #[inline(always)]
 pub(crate) fn walk_cells(a: V3, b: V3, inv_cell: f32, mut visit: impl FnMut(u32)) -> bool {
-    let mut at = cell_of(a, inv_cell);
-    let end = cell_of(b, inv_cell);
-    if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
+    let Some(mut walk) = Walk::new(a, b, inv_cell) else {
         return false;
+    };
+    visit(pack(walk.at));
+    while walk.advance().is_some() {
+        visit(pack(walk.at));
     }
-    let mut step = [0i32; 3];
-    // Segment parameter of the next cell wall per axis, and between walls.
-    let mut next = [f32::INFINITY; 3];
-    let mut delta = [f32::INFINITY; 3];
-    for c in 0..3 {
-        let d = (b[c] - a[c]) * inv_cell;
-        let x = a[c] * inv_cell;
-        if end[c] > at[c] {
-            step[c] = 1;
-            delta[c] = 1.0 / d;
-            next[c] = ((at[c] as f32 + 1.0) - x) / d;
-        } else if end[c] < at[c] {
-            step[c] = -1;
-            delta[c] = -1.0 / d;
-            next[c] = (at[c] as f32 - x) / d;
+    true
+}
+
+/// The cell-by-cell walk of a segment (Amanatides and Woo 1987) that
+/// [`walk_cells`] and [`cells_near_segment`] share.
+struct Walk {
+    at: [i32; 3],
+    end: [i32; 3],
+    step: [i32; 3],
+    /// Segment parameter of the next cell wall per axis, and between walls.
+    next: [f32; 3],
+    delta: [f32; 3],
+}
+
+impl Walk {
+    /// `None` when the segment crosses `MAX_CELLS_PER_EDGE` walls or more.
+    #[inline(always)]
+    fn new(a: V3, b: V3, inv_cell: f32) -> Option<Walk> {
+        let at = cell_of(a, inv_cell);
+        let end = cell_of(b, inv_cell);
+        if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
+            return None;
         }
+        let mut step = [0i32; 3];
+        let mut next = [f32::INFINITY; 3];
+        let mut delta = [f32::INFINITY; 3];
+        for c in 0..3 {
+            let d = (b[c] - a[c]) * inv_cell;
+            let x = a[c] * inv_cell;
+            if end[c] > at[c] {
+                step[c] = 1;
+                delta[c] = 1.0 / d;
+                next[c] = ((at[c] as f32 + 1.0) - x) / d;
+            } else if end[c] < at[c] {
+                step[c] = -1;
+                delta[c] = -1.0 / d;
+                next[c] = (at[c] as f32 - x) / d;
+            }
+        }
+        Some(Walk {
+            at,
+            end,
+            step,
+            next,
+            delta,
+        })
     }
-    visit(pack(at));
-    // One wall per step, on an axis not yet at the end cell, so the walk
-    // ends in `b`'s cell whatever round-off does at corners.
-    while at != end {
+
+    /// Crosses the next wall, returning its segment parameter, or `None`
+    /// in the end cell. One wall per step, on an axis not yet at the end
+    /// cell, so the walk ends in `b`'s cell whatever round-off does at
+    /// corners.
+    #[inline(always)]
+    fn advance(&mut self) -> Option<f32> {
+        if self.at == self.end {
+            return None;
+        }
         let mut c = 3;
         for axis in 0..3 {
-            if at[axis] != end[axis] && (c == 3 || next[axis] < next[c]) {
+            if self.at[axis] != self.end[axis] && (c == 3 || self.next[axis] < self.next[c]) {
                 c = axis;
             }
         }
-        at[c] += step[c];
-        next[c] += delta[c];
-        visit(pack(at));
+        let t = self.next[c];
+        self.at[c] += self.step[c];
+        self.next[c] += self.delta[c];
+        Some(t)
     }
-    true
 }
 
 /// The cells that may hold a point within `margin` of segment `a`-`b`,
@@ -140,30 +178,12 @@ pub(crate) fn cells_near_segment(
     cells: &mut Vec<u32>,
 ) -> bool {
     cells.clear();
-    let mut at = cell_of(a, inv_cell);
-    let end = cell_of(b, inv_cell);
-    if crossings(at, end) >= MAX_CELLS_PER_EDGE as i64 {
+    let Some(mut walk) = Walk::new(a, b, inv_cell) else {
         return false;
-    }
+    };
     // f32 round-off of the pieces' ends: a few ulps of the coordinates.
     let largest = a.iter().chain(&b).fold(0.0f32, |m, c| m.max(c.abs()));
     let grow = margin * 1.001 + 8.0 * f32::EPSILON * largest;
-    let mut step = [0i32; 3];
-    let mut next = [f32::INFINITY; 3];
-    let mut delta = [f32::INFINITY; 3];
-    for c in 0..3 {
-        let d = (b[c] - a[c]) * inv_cell;
-        let x = a[c] * inv_cell;
-        if end[c] > at[c] {
-            step[c] = 1;
-            delta[c] = 1.0 / d;
-            next[c] = ((at[c] as f32 + 1.0) - x) / d;
-        } else if end[c] < at[c] {
-            step[c] = -1;
-            delta[c] = -1.0 / d;
-            next[c] = (at[c] as f32 - x) / d;
-        }
-    }
     let point = |t: f32| -> V3 {
         let t = t.clamp(0.0, 1.0);
         std::array::from_fn(|k| a[k] + (b[k] - a[k]) * t)
@@ -172,21 +192,9 @@ pub(crate) fn cells_near_segment(
     // together they cover the segment whatever round-off does.
     let mut from = a;
     loop {
-        let done = at == end;
-        let to = if done {
-            b
-        } else {
-            let mut c = 3;
-            for axis in 0..3 {
-                if at[axis] != end[axis] && (c == 3 || next[axis] < next[c]) {
-                    c = axis;
-                }
-            }
-            let t = next[c];
-            at[c] += step[c];
-            next[c] += delta[c];
-            point(t)
-        };
+        let wall = walk.advance();
+        let done = wall.is_none();
+        let to = wall.map_or(b, point);
         let lo = cell_of(std::array::from_fn(|k| from[k].min(to[k]) - grow), inv_cell);
         let hi = cell_of(std::array::from_fn(|k| from[k].max(to[k]) + grow), inv_cell);
         let count: i64 = (0..3)
