@@ -11,7 +11,8 @@
 # (physical) model.
 #
 # Uses $GROOMBAKE if set, else builds and uses the release binary.
-# Usage: docs/make_tuning_pictures.sh
+# Usage: docs/make_tuning_pictures.sh [PREFIX...]
+# (with prefixes, only the pictures whose name starts with one: `damping`)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${GROOMBAKE:-}"
@@ -20,6 +21,7 @@ if [ -z "$bin" ]; then
   bin="${CARGO_TARGET_DIR:-target}/release/groombake"
 fi
 bin=$(realpath "$bin")
+only=("$@")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p docs/img
@@ -29,6 +31,10 @@ mkdir -p docs/img
 # docs/img/tune_NAME.png.
 shot() {
   local name=$1 view=$2 frames=$3 start
+  if [ ${#only[@]} -gt 0 ] && ! printf '%s\n' "${only[@]}" | grep -q -x -F -e "${name%%_*}" -e "$name"; then
+    cat > /dev/null
+    return
+  fi
   start=$(date +%s)
   {
     cat
@@ -41,7 +47,9 @@ shot() {
 }
 
 # A scalp of 60 strands of 12 cm (1 cm edges), combed straight out, that
-# falls under gravity for `duration` seconds.
+# falls under gravity for `duration` seconds: without the sag-free start
+# (which would make the groom the shape that stands still), so the
+# stiffness and damping rows show hair that moves.
 scalp() { # youngs_modulus damping duration
   cat <<EOF
 [groom]
@@ -49,6 +57,7 @@ generate = { layout = "scalp", strands = 60, length = 0.12, segment_length = 0.0
 [material]
 youngs_modulus = $1
 [solver]
+sag_free = false
 damping = { linear = $2, angular = $2 }
 [[stage]]
 kind = "settle"
@@ -106,7 +115,7 @@ EOF
 
 # Stiffness, [material] youngs_modulus (Pa): the scalp at the start and
 # after 1.5 s, from the side.
-for e in 3.5e8 3.5e9 3.5e10; do
+for e in 3.5e8 3.5e9 1e10; do
   scalp "$e" 2 1.5 | shot "stiffness_$e" side 0,15
 done
 
