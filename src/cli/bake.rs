@@ -16,7 +16,7 @@ pub struct BakeArgs {
     /// The timeline (TOML).
     #[arg(value_hint = clap::ValueHint::FilePath)]
     timeline: PathBuf,
-    /// Folder that relative export paths are written under (default: the current folder).
+    /// Folder that relative export paths are written under.
     #[arg(long, default_value = ".", value_hint = clap::ValueHint::DirPath)]
     out: PathBuf,
     /// Worker threads (default: one per core; at most 1024). Outputs are identical for any count.

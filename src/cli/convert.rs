@@ -18,7 +18,7 @@ pub struct ConvertArgs {
     /// --units and --up override its units and axis.
     #[arg(long)]
     target: Option<exporters::Target>,
-    /// Units of the output (m, cm, mm, in, or metres per unit); default: the
+    /// Units of the output (m, cm, mm or in); default: the
     /// target's, else the format's (glTF, .abc, .obj m; USD the input's;
     /// .hair, .data cm).
     #[arg(long, value_parser = values::suggest::<Units>(values::UNITS))]

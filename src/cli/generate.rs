@@ -22,6 +22,7 @@ pub struct GenerateArgs {
     /// Output file; its extension picks the format.
     #[arg(short, long)]
     output: PathBuf,
+    /// Number of strands.
     #[arg(long, default_value_t = 200)]
     strands: usize,
     /// Strand length, metres.
@@ -30,6 +31,7 @@ pub struct GenerateArgs {
     /// Segment length, metres.
     #[arg(long, default_value_t = 0.01)]
     segment_length: f32,
+    /// Seed of the random root placement (the same seed, the same groom).
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Head semi-axes x,y,z in metres (equal for a sphere).
