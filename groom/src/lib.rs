@@ -119,6 +119,20 @@ pub struct Groom {
 }
 
 impl Groom {
+    /// The groom's frames, or its rest pose as one frame at time 0 when it
+    /// has none (a still groom in a sequence of animated ones).
+    pub fn frames_or_rest(&self) -> std::borrow::Cow<'_, [Frame]> {
+        if self.frames.is_empty() {
+            std::borrow::Cow::Owned(vec![Frame {
+                time: 0.0,
+                points: self.points.clone(),
+                attributes: Vec::new(),
+            }])
+        } else {
+            std::borrow::Cow::Borrowed(&self.frames)
+        }
+    }
+
     /// A groom from strands given as separate point lists.
     pub fn from_strands<I, S>(strands: I) -> Groom
     where

@@ -242,17 +242,7 @@ pub fn write_sequence(
                 "the grooms of a sequence must have the same attributes".into(),
             ));
         }
-        let rest = [Frame {
-            time: 0.0,
-            points: groom.points.clone(),
-            attributes: Vec::new(),
-        }];
-        let frames = if groom.frames.is_empty() {
-            &rest[..]
-        } else {
-            &groom.frames[..]
-        };
-        for frame in frames {
+        for frame in groom.frames_or_rest().iter() {
             scene.check_frame_of(path, frame, groom.points.len())?;
             let code = time_code(frame.time, DEFAULT_FPS);
             if codes.last().is_some_and(|&last| code <= last) {

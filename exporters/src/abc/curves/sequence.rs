@@ -5,7 +5,7 @@
 
 use super::{fixed_samples, CurvesExport};
 use crate::{AttributeSet, ExportError, FrameWriter};
-use groom::{Frame, Groom, UpAxis};
+use groom::{Groom, UpAxis};
 use std::path::Path;
 
 /// Frames per second of a sequence (its frames' times give the sampling:
@@ -32,17 +32,7 @@ pub fn write_sequence(
         if index > 0 {
             export.change_topology(groom, attributes)?;
         }
-        let rest = [Frame {
-            time: 0.0,
-            points: groom.points.clone(),
-            attributes: Vec::new(),
-        }];
-        let frames = if groom.frames.is_empty() {
-            &rest[..]
-        } else {
-            &groom.frames[..]
-        };
-        for frame in frames {
+        for frame in groom.frames_or_rest().iter() {
             export.write_frame(frame)?;
         }
     }
