@@ -127,7 +127,7 @@ const RULES: &[Rule] = &[
     rule("stage.blower.from", -MAX_COORDINATE, MAX_COORDINATE, "m"),
     rule("stage.blower.to", -MAX_COORDINATE, MAX_COORDINATE, "m"),
     rule("stage.blower.strength", 0.0, 1e3, "m/s^2"),
-    rule("stage.blower.hydrogen_rate", 0.0, 1.0, ""),
+    rule("stage.blower.hydrogen_rate", 0.0, 1.0, "s/m"),
     rule("stage.blower.falloff_length", 1e-4, MAX_COORDINATE, "m"),
     rule("stage.blower.cone_half_angle", 0.0, 180.0, "degrees"),
     rule("stage.rod.radius", 1e-4, 1.0, "m"),
@@ -295,5 +295,75 @@ mod tests {
                 r.path
             );
         }
+    }
+
+    /// A number as the table writes it: `1e-4`, `1/30`, `2^64-1`.
+    fn table_number(text: &str) -> f64 {
+        if text == "2^64-1" {
+            return u64::MAX as f64;
+        }
+        if let Some((a, b)) = text.split_once('/') {
+            return table_number(a) / table_number(b);
+        }
+        text.parse()
+            .unwrap_or_else(|_| panic!("not a number in the table: {text}"))
+    }
+
+    /// The table a TD reads (`docs/tuning.md`, "Every number's range") is
+    /// the one `validate` applies: the same keys, bounds and units.
+    #[test]
+    fn the_documented_table_is_the_checked_one() {
+        let doc = include_str!("../../docs/tuning.md");
+        let section = doc
+            .split("## Every number's range")
+            .nth(1)
+            .expect("docs/tuning.md has the section");
+        let rows: Vec<[String; 4]> = section
+            .lines()
+            .skip_while(|l| !l.starts_with("| key"))
+            .skip(2)
+            .take_while(|l| l.starts_with('|'))
+            .map(|l| {
+                let cells: Vec<String> = l
+                    .trim_matches('|')
+                    .split('|')
+                    .map(|c| c.trim().trim_matches('`').to_string())
+                    .collect();
+                assert_eq!(cells.len(), 4, "row {l}");
+                [
+                    cells[0].clone(),
+                    cells[1].clone(),
+                    cells[2].clone(),
+                    cells[3].clone(),
+                ]
+            })
+            .collect();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+        let mut wrong = Vec::new();
+        for r in RULES {
+            let Some(row) = rows.iter().find(|row| row[0] == r.path) else {
+                wrong.push(format!("{} has no row", r.path));
+                continue;
+            };
+            let unit = if r.unit.is_empty() { "-" } else { r.unit };
+            if row[3] != unit {
+                wrong.push(format!(
+                    "{}: unit {} in the table, {unit} checked",
+                    r.path, row[3]
+                ));
+            }
+            if !close(table_number(&row[1]), r.min) || !close(table_number(&row[2]), r.max) {
+                wrong.push(format!(
+                    "{}: {} to {} in the table, {} to {} checked",
+                    r.path, row[1], row[2], r.min, r.max
+                ));
+            }
+        }
+        for row in &rows {
+            if !RULES.iter().any(|r| r.path == row[0]) {
+                wrong.push(format!("{} is in the table, not checked", row[0]));
+            }
+        }
+        assert!(wrong.is_empty(), "docs/tuning.md:\n{}", wrong.join("\n"));
     }
 }
