@@ -91,7 +91,10 @@ impl FrameStream {
                 let sample = u32::try_from(index).map_err(|_| missing())?;
                 let (mut groom, _) = abc_sample(&self.path, mapped, sample)?;
                 mapped.release();
-                let frame = groom.frames.pop().ok_or_else(missing)?;
+                let mut frame = groom.frames.pop().ok_or_else(missing)?;
+                // Objects sampled fewer times hold their last sample; the
+                // frame's time is the most-sampled object's, as `read` has it.
+                frame.time = self.times.get(index).copied().ok_or_else(missing)?;
                 Ok(frame)
             }
         }
@@ -104,4 +107,30 @@ fn abc_sample(path: &Path, mapped: &Mapped, sample: u32) -> Result<(Groom, Vec<f
     let fail = |fault: Fault| ImportError::malformed(path, fault.place, fault.message);
     let archive = Archive::open(mapped.bytes()).map_err(fail)?;
     scene::read_groom_samples(&archive, Some(sample)).map_err(fail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frame by frame, the stream gives what reading the file whole gives:
+    /// topology, rest points, attributes, and each frame.
+    #[test]
+    fn frames_read_one_at_a_time_equal_the_whole_read() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/xform_cubic_indexed.abc");
+        let whole = crate::read(&path).unwrap();
+        assert_eq!(whole.frames.len(), 3);
+        let mut stream = FrameStream::open(&path).unwrap();
+        let mut rest = whole.clone();
+        rest.frames.clear();
+        assert_eq!(stream.groom(), &rest);
+        assert_eq!(stream.frame_count(), 3);
+        for (index, frame) in whole.frames.iter().enumerate() {
+            assert_eq!(&stream.frame(index).unwrap(), frame, "frame {index}");
+        }
+        // Again, out of order: each read stands alone.
+        assert_eq!(&stream.frame(1).unwrap(), &whole.frames[1]);
+        let error = stream.frame(3).unwrap_err().to_string();
+        assert!(error.contains("no frame 3: the file has 3"), "{error}");
+    }
 }
