@@ -154,8 +154,9 @@ fn read_drawn_frames(
         previous_time = frame.time;
         groom.frames.push(frame);
     }
-    let last = match (args.view, count.checked_sub(1)) {
-        (None, Some(last)) => Some(stream.frame(last)?),
+    // `--rest` draws a still shape: its view is of the spread, not the change.
+    let last = match (args.view, args.rest, count.checked_sub(1)) {
+        (None, false, Some(last)) => Some(stream.frame(last)?),
         _ => None,
     };
     Ok((groom, drawn, last))
