@@ -621,6 +621,15 @@ impl Report {
         self.timing.seconds / (self.timing.steps as f64 * f64::from(dt))
     }
 
+    /// CPU seconds (user + system, all threads of the process) per
+    /// simulated second: unlike wall time, not stretched by other
+    /// processes sharing the cores.
+    pub fn cpu_seconds_per_simulated_second(&self, dt: f32) -> Option<f64> {
+        self.timing
+            .cpu_seconds
+            .map(|cpu| cpu / (self.timing.steps as f64 * f64::from(dt)))
+    }
+
     /// CPU nanoseconds (all threads) per vertex per step.
     pub fn cpu_ns_per_vertex_step(&self) -> Option<f64> {
         self.timing

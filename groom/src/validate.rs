@@ -1,6 +1,6 @@
 //! Checks of a groom's consistency, reporting every problem with its place.
 
-use crate::{Groom, Scope};
+use crate::{Frame, Groom, Scope};
 use std::fmt;
 
 /// What is wrong.
@@ -168,26 +168,36 @@ impl Groom {
         }
         let mut previous_time = f64::NEG_INFINITY;
         for (index, frame) in self.frames.iter().enumerate() {
-            if frame.points.len() != self.points.len() {
-                problems.push(Problem {
-                    frame: Some(index),
-                    ..Problem::new(ProblemKind::FrameLength {
-                        expected: self.points.len(),
-                        found: frame.points.len(),
-                    })
-                });
-            } else {
-                for (strand, range) in self.strand_ranges().enumerate() {
-                    push_non_finite(&mut problems, &frame.points[range], strand, Some(index));
-                }
-            }
-            if frame.time.is_nan() || frame.time <= previous_time {
-                problems.push(Problem {
-                    frame: Some(index),
-                    ..Problem::new(ProblemKind::FrameTimeOrder)
-                });
-            }
+            problems.extend(self.validate_frame(index, frame, previous_time));
             previous_time = frame.time;
+        }
+        problems
+    }
+
+    /// The problems of frame `index` of this groom's topology, `frame`,
+    /// given the time of the frame before it (`NEG_INFINITY` for the
+    /// first): what [`Groom::validate`] finds in it, for a reader that
+    /// holds one frame at a time.
+    pub fn validate_frame(&self, index: usize, frame: &Frame, previous_time: f64) -> Vec<Problem> {
+        let mut problems = Vec::new();
+        if frame.points.len() != self.points.len() {
+            problems.push(Problem {
+                frame: Some(index),
+                ..Problem::new(ProblemKind::FrameLength {
+                    expected: self.points.len(),
+                    found: frame.points.len(),
+                })
+            });
+        } else {
+            for (strand, range) in self.strand_ranges().enumerate() {
+                push_non_finite(&mut problems, &frame.points[range], strand, Some(index));
+            }
+        }
+        if frame.time.is_nan() || frame.time <= previous_time {
+            problems.push(Problem {
+                frame: Some(index),
+                ..Problem::new(ProblemKind::FrameTimeOrder)
+            });
         }
         problems
     }

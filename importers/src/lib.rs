@@ -9,9 +9,11 @@ mod binary;
 pub mod data;
 pub mod gltf;
 pub mod hair;
+mod mapped;
 pub mod mesh;
 pub mod obj;
 mod obj_syntax;
+pub mod stream;
 mod transform;
 pub mod usd;
 

@@ -9,9 +9,9 @@ use std::path::PathBuf;
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Strands on a scalp cap.
-    #[arg(long, default_value_t = 10_000, conflicts_with = "guides")]
-    strands: usize,
+    /// Strands on a scalp cap (default 10,000).
+    #[arg(long, conflicts_with = "guides")]
+    strands: Option<usize>,
     /// Simulated guides on a scalp cap (as --strands), which drive the
     /// render hairs of --render.
     #[arg(long, requires = "render")]
@@ -24,15 +24,19 @@ pub struct BenchArgs {
     /// A named workload: `full-head` is 5,000 guides x 32 vertices driving
     /// 100,000 render hairs, the mesh head samples/head.obj (or the mesh of
     /// --collider), a pillow and hair-hair (alpha 5); it also prints the
-    /// projected cost of 5 simulated seconds.
+    /// projected cost of 5 simulated seconds (from wall and from CPU time).
+    /// `--hair-hair-mode volumetric` replaces its pairwise hair-hair with
+    /// the volumetric grid, `--hair-hair ALPHA` sets its pairwise alpha;
+    /// --strands, --guides, --render, --vertices and --pillow are the
+    /// preset's own and refused with it.
     #[arg(long, value_parser = ["full-head"])]
     preset: Option<String>,
     /// A pillow: a slab that moves in from outside the hair at 18 cm/s and presses against the left side of the head (from 1.5 s).
     #[arg(long)]
     pillow: bool,
-    /// Vertices per strand.
-    #[arg(long, default_value_t = 32)]
-    vertices: usize,
+    /// Vertices per strand (default 32).
+    #[arg(long)]
+    vertices: Option<usize>,
     /// Worker threads (default: all cores; at most 1024).
     #[arg(short = 'j', long, value_parser = super::bake::parse_threads)]
     threads: Option<usize>,
@@ -111,7 +115,8 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         if !(mu.is_finite() && (0.0..=1.0).contains(&mu)) {
             return Err(BadInput("--hair-friction must be in [0, 1]".into()).into());
         }
-        if args.hair_hair.is_none() || args.hair_hair_mode != "pairwise" || args.model == "paper" {
+        let pairwise_on = args.hair_hair.is_some() || args.preset.is_some();
+        if !pairwise_on || args.hair_hair_mode != "pairwise" || args.model == "paper" {
             return Err(BadInput(
                 "--hair-friction needs pairwise --hair-hair and the physical model".into(),
             )
@@ -130,33 +135,14 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         None => model.default_tolerance(),
     });
     let collider = collider_of(&args.collider)?;
+    if args.hair_hair_mode == "volumetric" && args.preset.is_none() && args.hair_hair.is_none() {
+        return Err(BadInput(
+            "--hair-hair-mode volumetric needs --hair-hair (it turns hair-hair on)".into(),
+        )
+        .into());
+    }
     let workload = match args.preset.as_deref() {
-        Some(_) => {
-            let head = match collider {
-                HeadCollider::Mesh(path) => path,
-                HeadCollider::None => PathBuf::from("samples/head.obj"),
-                HeadCollider::Ball => {
-                    return Err(BadInput(
-                        "--preset full-head takes a mesh head: --collider mesh FILE".into(),
-                    )
-                    .into())
-                }
-            };
-            if !head.is_file() {
-                return Err(BadInput(format!(
-                    "--preset full-head: head mesh '{}' not found (run from the repository \
-                     or give --collider mesh FILE)",
-                    head.display()
-                ))
-                .into());
-            }
-            Workload {
-                model,
-                iterations,
-                tolerance,
-                ..Workload::full_head(head)
-            }
-        }
+        Some(preset) => preset_workload(preset, &args, collider)?,
         None => Workload {
             model,
             iterations,
@@ -168,8 +154,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             collider,
             render: args.render,
             pillow: args.pillow,
-            ..Workload::free_hair(args.guides.unwrap_or(args.strands), args.vertices)
+            ..Workload::free_hair(
+                args.guides.or(args.strands).unwrap_or(10_000),
+                args.vertices.unwrap_or(32),
+            )
         },
+    };
+    let workload = Workload {
+        model,
+        iterations,
+        tolerance,
+        ..workload
     };
     let workload = Workload {
         treatment: args.treatment,
@@ -192,7 +187,17 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     let cpu = cpu_model();
     let dt = bench::step_dt();
     let per_simulated_second = report.seconds_per_simulated_second(dt);
+    let cpu_per_simulated_second = report.cpu_seconds_per_simulated_second(dt);
+    // The wall projection holds only on a machine as loaded as this one
+    // was; the CPU one (all threads' user + system time) does not stretch
+    // with other processes' load: divided by the threads it is the wall
+    // time on as many idle cores (if the work spreads over them).
     let projected_5s = args.preset.is_some().then_some(5.0 * per_simulated_second);
+    let projected_5s_cpu = args
+        .preset
+        .is_some()
+        .then_some(cpu_per_simulated_second.map(|c| 5.0 * c))
+        .flatten();
     if args.json {
         let json = serde_json::json!({
             "strands": workload.strands,
@@ -234,7 +239,10 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 "export": shares.export,
             },
             "seconds_per_simulated_second": per_simulated_second,
+            "cpu_seconds_per_simulated_second": cpu_per_simulated_second,
             "projected_5s_seconds": projected_5s,
+            "projected_5s_cpu_seconds": projected_5s_cpu,
+            "projected_5s_cpu_seconds_per_thread": projected_5s_cpu.map(|c| c / threads as f64),
             "peak_memory_bytes": report.peak_memory,
             "load_average": load,
             "cpu": cpu,
@@ -271,12 +279,25 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             );
         }
         println!(
-            "{per_simulated_second:.1} s of wall time per simulated second (dt {dt:.6} s){}",
-            projected_5s.map_or(String::new(), |p| format!(
-                "; 5 simulated seconds projected at {p:.0} s ({:.1} min)",
-                p / 60.0
-            ))
+            "{per_simulated_second:.1} s of wall time and {} s of CPU time (user + system, \
+             all threads) per simulated second (dt {dt:.6} s)",
+            cpu_per_simulated_second.map_or("?".to_string(), |c| format!("{c:.1}"))
         );
+        if let Some(wall) = projected_5s {
+            println!(
+                "5 simulated seconds projected: {wall:.0} s ({:.1} min) of wall time at load \
+                 average {}; {} of CPU time, {} per thread on {threads} idle cores; CPU {}",
+                wall / 60.0,
+                load.map_or("?".to_string(), |l| format!("{l:.2}")),
+                projected_5s_cpu.map_or("?".to_string(), |c| format!("{c:.0} s")),
+                projected_5s_cpu.map_or("?".to_string(), |c| format!(
+                    "{:.0} s ({:.1} min)",
+                    c / threads as f64,
+                    c / threads as f64 / 60.0
+                )),
+                cpu.as_deref().unwrap_or("?")
+            );
+        }
         let share = |s: Option<f64>| s.map_or("-".to_string(), |s| format!("{:.1} %", s * 100.0));
         println!(
             "shares of CPU time (by ablation and the solver's phase clock): solver {} \
@@ -303,6 +324,61 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The workload of `--preset`, with the options that apply to it: the
+/// hair-hair mode and alpha, the collider mesh. An option the preset fixes
+/// itself is refused rather than ignored.
+fn preset_workload(
+    preset: &str,
+    args: &BenchArgs,
+    collider: HeadCollider,
+) -> Result<Workload, BadInput> {
+    let fixed = [
+        ("--strands", args.strands.is_some()),
+        ("--guides", args.guides.is_some()),
+        ("--render", args.render.is_some()),
+        ("--vertices", args.vertices.is_some()),
+        ("--pillow", args.pillow),
+    ];
+    if let Some((name, _)) = fixed.iter().find(|(_, given)| *given) {
+        return Err(BadInput(format!(
+            "{name} does not apply with --preset {preset}: the preset fixes it \
+             (5,000 guides x 32 vertices, 100,000 render hairs, a pillow)"
+        )));
+    }
+    let head = match collider {
+        HeadCollider::Mesh(path) => path,
+        HeadCollider::None => PathBuf::from("samples/head.obj"),
+        HeadCollider::Ball => {
+            return Err(BadInput(format!(
+                "--preset {preset} takes a mesh head: --collider mesh FILE"
+            )))
+        }
+    };
+    if !head.is_file() {
+        return Err(BadInput(format!(
+            "--preset {preset}: head mesh '{}' not found (run from the repository \
+             or give --collider mesh FILE)",
+            head.display()
+        )));
+    }
+    let mut workload = Workload::full_head(head);
+    if args.hair_hair_mode == "volumetric" {
+        if args.hair_hair.is_some() || args.hair_friction.is_some() {
+            return Err(BadInput(
+                "--hair-hair ALPHA and --hair-friction are of pairwise hair-hair: they do not \
+                 apply with --hair-hair-mode volumetric"
+                    .into(),
+            ));
+        }
+        workload.hair_hair = None;
+        workload.volumetric = Some(groombake::sim::Volumetric::default());
+    } else if let Some(alpha) = args.hair_hair {
+        workload.hair_hair = Some(alpha);
+    }
+    workload.hair_friction = args.hair_friction;
+    Ok(workload)
+}
+
 /// The CPU's model name and the instructions the solver dispatches to
 /// (Linux): a figure is only comparable with one from the same CPU (the
 /// same bench ran 1.6x slower on one virtual machine than on another).
@@ -323,4 +399,51 @@ fn cpu_model() -> Option<String> {
 fn load_average() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/loadavg").ok()?;
     text.split_whitespace().next()?.parse().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: BenchArgs,
+    }
+
+    fn preset(extra: &[&str]) -> Result<Workload, BadInput> {
+        let mut argv = vec!["bench", "--preset", "full-head"];
+        argv.extend_from_slice(extra);
+        let args = Cli::parse_from(argv).args;
+        // Tests run in the package root, where samples/head.obj is.
+        preset_workload("full-head", &args, collider_of(&args.collider)?)
+    }
+
+    /// Issue 38: `--preset full-head --hair-hair-mode volumetric` ran
+    /// pairwise; the mode now replaces the preset's pairwise hair-hair.
+    #[test]
+    fn preset_takes_the_volumetric_mode() {
+        let pairwise = preset(&[]).unwrap();
+        assert_eq!(pairwise.hair_hair, Some(5.0));
+        assert!(pairwise.volumetric.is_none());
+        let volumetric = preset(&["--hair-hair-mode", "volumetric"]).unwrap();
+        assert_eq!(volumetric.hair_hair, None);
+        assert!(volumetric.volumetric.is_some());
+        assert_eq!(volumetric.render, Some(100_000));
+        assert_eq!(preset(&["--hair-hair", "2"]).unwrap().hair_hair, Some(2.0));
+    }
+
+    #[test]
+    fn preset_refuses_what_it_fixes_or_what_does_not_apply() {
+        for extra in [
+            &["--strands", "50"][..],
+            &["--vertices", "8"],
+            &["--pillow"],
+            &["--hair-hair-mode", "volumetric", "--hair-hair", "5"],
+        ] {
+            let error = preset(extra).err().map(|e| e.0).unwrap_or_default();
+            assert!(error.contains("not apply"), "{extra:?}: {error}");
+        }
+    }
 }

@@ -2,11 +2,12 @@
 //! mesh's (`.obj`, `.glb`, `.gltf` with triangles and no curves): its
 //! triangles and bounds, to place it against the groom.
 
+use super::BadInput;
 use clap::Args;
 use groom::Groom;
 use serde_json::json;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Debug, Args)]
 pub struct InspectArgs {
@@ -18,10 +19,75 @@ pub struct InspectArgs {
     json: bool,
 }
 
+/// What `inspect` reports of a file: the groom of its (first) topology
+/// and the facts of all its frames, gathered frame by frame for a file read
+/// a frame at a time.
+struct Facts {
+    /// One groom per stretch of time with one topology; a streamed file's
+    /// has no frames (they are summed up in `times`, `bounds`, `problems`).
+    grooms: Vec<Groom>,
+    /// Every frame's time, in file order.
+    times: Vec<f64>,
+    /// Of the first topology: rest points and every frame.
+    bounds: Option<([f32; 3], [f32; 3])>,
+    /// Of the first topology and its frames.
+    problems: Vec<groom::Problem>,
+}
+
+impl Facts {
+    /// A file read whole (USD, whose topology may change over time).
+    fn of_sequence(grooms: Vec<Groom>) -> Facts {
+        Facts {
+            times: grooms
+                .iter()
+                .flat_map(|g| g.frames.iter().map(|f| f.time))
+                .collect(),
+            bounds: grooms[0].bounds(),
+            problems: grooms[0].validate(),
+            grooms,
+        }
+    }
+
+    /// A file read a frame at a time: memory holds the topology and one
+    /// frame. A fatal problem in any frame refuses the file, as reading it
+    /// whole does.
+    fn of_stream(path: &Path, mut stream: importers::stream::FrameStream) -> anyhow::Result<Facts> {
+        let groom = stream.groom().clone();
+        super::check_groom(path, &groom)?;
+        let mut problems = groom.validate();
+        let mut bounds = groom.bounds();
+        let mut previous_time = f64::NEG_INFINITY;
+        for index in 0..stream.frame_count() {
+            let frame = stream.frame(index)?;
+            let found = groom.validate_frame(index, &frame, previous_time);
+            if let Some(problem) = found.iter().find(|p| p.is_fatal()) {
+                return Err(BadInput(format!("{}: {problem}", path.display())).into());
+            }
+            problems.extend(found);
+            previous_time = frame.time;
+            let frame_bounds = groom::bounds_of(frame.points.iter());
+            bounds = match (bounds, frame_bounds) {
+                (Some((a, b)), Some((c, d))) => Some((
+                    [0, 1, 2].map(|k| a[k].min(c[k])),
+                    [0, 1, 2].map(|k| b[k].max(d[k])),
+                )),
+                (one, other) => one.or(other),
+            };
+        }
+        Ok(Facts {
+            times: stream.times().to_vec(),
+            grooms: vec![groom],
+            bounds,
+            problems,
+        })
+    }
+}
+
 /// The facts `inspect` prints, as JSON.
-pub fn summary(groom: &Groom) -> serde_json::Value {
-    let (min, max) = groom.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
-    let problems = groom.validate();
+fn summary(facts: &Facts) -> serde_json::Value {
+    let groom = &facts.grooms[0];
+    let (min, max) = facts.bounds.unwrap_or(([0.0; 3], [0.0; 3]));
+    let problems = &facts.problems;
     let single_point = problems
         .iter()
         .filter(|p| matches!(p.kind, groom::ProblemKind::SinglePointStrand))
@@ -38,7 +104,7 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
             })
         })
         .collect();
-    let times: Vec<f64> = groom.frames.iter().map(|f| f.time).collect();
+    let times = &facts.times;
     let prims: Vec<_> = prims_of(groom)
         .map(|(path, strands)| json!({"path": path, "strands": strands}))
         .collect();
@@ -55,7 +121,7 @@ pub fn summary(groom: &Groom) -> serde_json::Value {
         "units_source": groom.provenance.units_source,
         "up_axis": groom.up_axis.name(),
         "basis": groom.basis.name(),
-        "frames": groom.frames.len(),
+        "frames": times.len(),
         "frame_times": times,
         "attributes": attributes,
         "prims": prims,
@@ -96,18 +162,30 @@ fn units_rule(source: &str) -> String {
 
 /// Each stretch of time with one topology: from when, strands, vertices
 /// and frames (one entry for a file whose topology does not change).
-fn topology(grooms: &[Groom]) -> Vec<serde_json::Value> {
-    grooms
-        .iter()
-        .map(|g| {
+fn topology(facts: &Facts) -> Vec<serde_json::Value> {
+    stretches(facts)
+        .map(|(from, g, frames)| {
             json!({
-                "from_time": g.frames.first().map(|f| f.time),
+                "from_time": from,
                 "strands": g.strand_count(),
                 "vertices": g.vertex_count(),
-                "frames": g.frames.len(),
+                "frames": frames,
             })
         })
         .collect()
+}
+
+/// Each stretch of one topology: its first time, its groom and its frame
+/// count (a streamed file's one groom holds no frames: all are its).
+fn stretches(facts: &Facts) -> impl Iterator<Item = (Option<f64>, &Groom, usize)> {
+    let streamed = facts.grooms.len() == 1;
+    facts.grooms.iter().map(move |g| {
+        if streamed {
+            (facts.times.first().copied(), g, facts.times.len())
+        } else {
+            (g.frames.first().map(|f| f.time), g, g.frames.len())
+        }
+    })
 }
 
 /// A mesh file as a collider reads it: `None` when it is no mesh (then
@@ -175,33 +253,35 @@ fn inspect_mesh(args: &InspectArgs, mesh: &importers::mesh::Mesh) -> anyhow::Res
 }
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    let grooms = match super::read_sequence(&args.file) {
-        Ok(grooms) => grooms,
+    // USD may change topology over time: read whole, as a sequence. The
+    // other formats are read a frame at a time.
+    let read = if matches!(
+        importers::extension_of(&args.file).as_str(),
+        "usda" | "usdc" | "usd"
+    ) {
+        super::read_sequence(&args.file).map(Facts::of_sequence)
+    } else {
+        importers::stream::FrameStream::open(&args.file)
+            .map_err(anyhow::Error::from)
+            .and_then(|stream| Facts::of_stream(&args.file, stream))
+    };
+    let facts = match read {
+        Ok(facts) => facts,
         Err(error) => match mesh_of(&args.file) {
             Some(mesh) => return inspect_mesh(&args, &mesh),
             None => return Err(error),
         },
     };
-    let groom = &grooms[0];
-    let mut summary = summary(groom);
-    summary["topology"] = json!(topology(&grooms));
-    let losses = super::losses(&args.file, &grooms);
+    let groom = &facts.grooms[0];
+    let mut summary = summary(&facts);
+    summary["topology"] = json!(topology(&facts));
+    let losses = super::losses(&args.file, &facts.grooms);
     summary["warnings"] = json!(losses);
     for loss in &losses {
         eprintln!(
             "groombake: warning: {}",
             super::shortened(&super::printable(loss))
         );
-    }
-    if grooms.len() > 1 {
-        // Frames of the whole sequence; the other facts are of the first
-        // topology.
-        let times: Vec<f64> = grooms
-            .iter()
-            .flat_map(|g| g.frames.iter().map(|f| f.time))
-            .collect();
-        summary["frames"] = json!(times.len());
-        summary["frame_times"] = json!(times);
     }
     let mut out = std::io::stdout().lock();
     if args.json {
@@ -213,7 +293,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     writeln!(out, "format      {}", groom.provenance.format)?;
     writeln!(out, "strands     {}", groom.strand_count())?;
     writeln!(out, "vertices    {}", groom.vertex_count())?;
-    if let Some((min, max)) = groom.bounds() {
+    if let Some((min, max)) = facts.bounds {
         writeln!(out, "bounds      {min:?} .. {max:?}")?;
     }
     writeln!(
@@ -225,20 +305,17 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     )?;
     writeln!(out, "basis       {}", groom.basis.name())?;
     writeln!(out, "frames      {}", summary["frames"])?;
-    let first = grooms.first().and_then(|g| g.frames.first());
-    let last = grooms.last().and_then(|g| g.frames.last());
-    if let (Some(first), Some(last)) = (first, last) {
-        writeln!(out, "time        {} .. {} s", first.time, last.time)?;
+    if let (Some(first), Some(last)) = (facts.times.first(), facts.times.last()) {
+        writeln!(out, "time        {first} .. {last} s")?;
     }
-    if grooms.len() > 1 {
-        for g in &grooms {
+    if facts.grooms.len() > 1 {
+        for (from, g, frames) in stretches(&facts) {
             writeln!(
                 out,
-                "topology    from {} s: {} strands, {} vertices ({} frames)",
-                g.frames.first().map_or(0.0, |f| f.time),
+                "topology    from {} s: {} strands, {} vertices ({frames} frames)",
+                from.unwrap_or(0.0),
                 g.strand_count(),
                 g.vertex_count(),
-                g.frames.len()
             )?;
         }
     }
@@ -255,7 +332,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             a.values.len()
         )?;
     }
-    for problem in groom.validate() {
+    for problem in &facts.problems {
         writeln!(out, "note        {problem}")?;
     }
     Ok(())

@@ -275,6 +275,21 @@ pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>
             return Err(BadInput(format!("{}: {problem}", path.display())).into());
         }
     }
+    no_strands_is_an_error(path, &grooms)?;
+    Ok(grooms)
+}
+
+/// The checks of [`read_sequence`] on a groom read a frame at a time:
+/// its topology and rest pose (each frame is checked as it is read).
+pub fn check_groom(path: &std::path::Path, groom: &groom::Groom) -> anyhow::Result<()> {
+    if let Some(problem) = groom.first_fatal_problem() {
+        return Err(BadInput(format!("{}: {problem}", path.display())).into());
+    }
+    no_strands_is_an_error(path, std::slice::from_ref(groom))
+}
+
+/// A file of no strands at all is refused, naming the first thing skipped.
+fn no_strands_is_an_error(path: &std::path::Path, grooms: &[groom::Groom]) -> anyhow::Result<()> {
     if grooms.iter().all(|g| g.strand_count() == 0) {
         let skipped: Vec<&String> = grooms.iter().flat_map(|g| &g.provenance.losses).collect();
         let mut message = format!(
@@ -286,7 +301,7 @@ pub fn read_sequence(path: &std::path::Path) -> anyhow::Result<Vec<groom::Groom>
         }
         return Err(BadInput(message).into());
     }
-    Ok(grooms)
+    Ok(())
 }
 
 /// What the readers could not keep of the grooms' file (`Provenance::losses`),
@@ -300,13 +315,4 @@ pub fn losses(file: &std::path::Path, grooms: &[groom::Groom]) -> Vec<String> {
         }
     }
     all
-}
-
-/// Reads a groom file and refuses one with fatal problems, naming the first.
-pub fn read_groom(path: &std::path::Path) -> anyhow::Result<groom::Groom> {
-    let groom = importers::read(path)?;
-    if let Some(problem) = groom.first_fatal_problem() {
-        return Err(BadInput(format!("{}: {problem}", path.display())).into());
-    }
-    Ok(groom)
 }

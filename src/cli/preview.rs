@@ -72,23 +72,25 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     if importers::extension_of(&args.file) == "toml" {
         return preview_timeline(&args);
     }
-    let mut groom = super::read_groom(&args.file)?;
+    let (mut groom, drawn, last) = read_drawn_frames(&args)?;
     if args.rest {
         groom = rest_shape_of_state(&args.file, groom)?;
     }
-    let view = args.view.unwrap_or_else(|| match groom.frames.last() {
+    let view = args.view.unwrap_or_else(|| match last {
         Some(last) => {
             let mut moved = groom.clone();
-            moved.points = last.points.clone();
+            moved.points = last.points;
             preview::view_showing_change(&groom, &moved)
         }
         None => preview::view_showing_spread(&groom),
     });
+    // Indices into the frames read (only those drawn).
+    let at = |frame: usize| drawn.iter().position(|&f| f == frame);
     let options = PreviewOptions {
         width: args.panel_size.unwrap_or(args.size).0,
         height: args.panel_size.unwrap_or(args.size).1,
         view,
-        frame: args.frame,
+        frame: args.frame.and_then(at),
         color_by: args.color.clone(),
         ..PreviewOptions::default()
     };
@@ -103,7 +105,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
             .map(|(&frame, label)| SheetEntry {
                 label,
                 groom: &groom,
-                frame: Some(frame),
+                frame: at(frame),
                 surfaces: &[],
             })
             .collect();
@@ -112,6 +114,52 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
     .map_err(|error| explain(&args.file, error))?;
     preview::write_png(&image, &args.output)?;
     Ok(())
+}
+
+/// The groom's topology and rest pose with only the frames drawn (in the
+/// order of the returned frame numbers), and its last frame when the view
+/// is to be chosen from it: a file is read a frame at a time, so memory
+/// holds the frames drawn, not all of them. The camera frames the rest
+/// pose and the frames drawn.
+fn read_drawn_frames(
+    args: &PreviewArgs,
+) -> anyhow::Result<(groom::Groom, Vec<usize>, Option<groom::Frame>)> {
+    let mut stream = importers::stream::FrameStream::open(&args.file)?;
+    let mut groom = stream.groom().clone();
+    super::check_groom(&args.file, &groom)?;
+    let mut drawn: Vec<usize> = args
+        .frame
+        .into_iter()
+        .chain(args.frames.iter().copied())
+        .collect();
+    drawn.sort_unstable();
+    drawn.dedup();
+    let count = stream.frame_count();
+    if let Some(&frame) = drawn.iter().find(|&&f| f >= count) {
+        return Err(explain(
+            &args.file,
+            PreviewError::NoSuchFrame { frame, count },
+        ));
+    }
+    let mut previous_time = f64::NEG_INFINITY;
+    for &index in &drawn {
+        let frame = stream.frame(index)?;
+        if let Some(problem) = groom
+            .validate_frame(index, &frame, previous_time)
+            .into_iter()
+            .find(|p| p.is_fatal())
+        {
+            return Err(BadInput(format!("{}: {problem}", args.file.display())).into());
+        }
+        previous_time = frame.time;
+        groom.frames.push(frame);
+    }
+    // `--rest` draws a still shape: its view is of the spread, not the change.
+    let last = match (args.view, args.rest, count.checked_sub(1)) {
+        (None, false, Some(last)) => Some(stream.frame(last)?),
+        _ => None,
+    };
+    Ok((groom, drawn, last))
 }
 
 /// A sheet of `--size` in all, or of pictures of `--panel-size` each.

@@ -30,6 +30,14 @@ fn bench_reports_ns_per_vertex_iteration_as_json() {
     assert_eq!(report["strands"], 50);
     assert_eq!(report["vertices"], 16);
     assert_eq!(report["iterations"], 3);
+    // CPU time beside wall time (issue 38): the per-simulated-second cost
+    // that load does not stretch, with the CPU and load it was measured on.
+    let cpu = report["cpu_seconds_per_simulated_second"]
+        .as_f64()
+        .expect("CPU seconds per simulated second");
+    assert!(cpu > 0.0 && cpu.is_finite(), "{report}");
+    assert!(report["cpu"].is_string(), "{report}");
+    assert!(report["load_average"].as_f64().is_some(), "{report}");
     // The solver's share split by its phase clock: each phase took some
     // time, and together they are the solver's share (here all of it).
     let shares = &report["shares"];
@@ -58,6 +66,12 @@ fn bench_refuses_bad_sizes() {
     dir.run_fail(&["bench", "--vertices", "1"], 2);
     dir.run_fail(&["bench", "--strands", "0", "--vertices", "8"], 2);
     dir.run_fail(&["bench", "--threads", "0"], 2);
+    // A mode that would run without hair-hair is refused, not ignored.
+    dir.run_fail(
+        &["bench", "--hair-hair-mode", "volumetric", "--strands", "10"],
+        2,
+    );
+    dir.run_fail(&["bench", "--preset", "full-head", "--strands", "10"], 2);
     dir.run_fail(
         &["bench", "--strands", "10000000", "--vertices", "10000"],
         2,

@@ -29,6 +29,7 @@ mod reports;
 mod roundtrip;
 mod samples;
 mod silent_loss;
+mod streaming;
 mod studio;
 mod treatments;
 mod usd;

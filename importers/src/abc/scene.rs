@@ -136,11 +136,30 @@ struct SceneReader<'r, 'a> {
     archive: &'r Archive<'a>,
     budget: Budget,
     notes: Vec<String>,
+    /// `Some(k)`: read only sample `k` of each object (its last one when
+    /// it has fewer), for a frame-at-a-time reader; `None`: every sample.
+    only_sample: Option<u32>,
+    /// The times of the most-sampled object's samples (every one, even
+    /// when only one sample is read).
+    times: Vec<f64>,
 }
 
 /// Reads every Curves object of the archive into one groom.
 pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
+    read_groom_samples(archive, None).map(|(groom, _)| groom)
+}
+
+/// Reads every Curves object of the archive into one groom, with every
+/// sample (`only_sample` `None`) or only sample `k` of each object as the
+/// groom's rest points and its single frame (when the file is animated);
+/// also the times of all the file's frames.
+pub fn read_groom_samples(
+    archive: &Archive,
+    only_sample: Option<u32>,
+) -> Result<(Groom, Vec<f64>), Fault> {
     let mut reader = SceneReader {
+        only_sample,
+        times: Vec::new(),
         archive,
         budget: Budget {
             remaining: archive
@@ -170,7 +189,7 @@ pub fn read_groom(archive: &Archive) -> Result<Groom, Fault> {
         info.push_str(note);
     }
     groom.provenance.info = info;
-    Ok(groom)
+    Ok((groom, reader.times))
 }
 
 /// The units of an archive by the units rule: groombake's own mark, else the
@@ -394,9 +413,21 @@ impl SceneReader<'_, '_> {
         // says when they are.
         let animated = positions.sample_count > 1;
         let sample_count = if animated { positions.sample_count } else { 1 };
+        if animated && sample_count as usize > self.times.len() {
+            // The header's count is unchecked: the budget bounds the list.
+            self.budget
+                .take((sample_count as usize).saturating_mul(8), &positions.path)?;
+            self.times = (0..sample_count)
+                .map(|index| self.archive.sample_time(positions, index))
+                .collect::<Result<_, _>>()?;
+        }
+        let wanted = match self.only_sample {
+            Some(k) => k.min(sample_count - 1)..k.min(sample_count - 1) + 1,
+            None => 0..sample_count,
+        };
         let mut samples = Vec::new();
         let mut times = Vec::new();
-        for index in 0..sample_count {
+        for index in wanted.clone() {
             let mut points = self.points(positions, index)?;
             if points.len() as u64 != total {
                 return Err(Fault::path(
@@ -451,6 +482,22 @@ impl SceneReader<'_, '_> {
                         && property.kind != Kind::Compound
                         && property.sample_count == sample_count
                     {
+                        if self.only_sample.is_some() {
+                            // One frame: its value, whether or not it
+                            // differs from the others (not read).
+                            let at = self.geom_param(
+                                property,
+                                &name,
+                                vertex_count,
+                                part.counts.len(),
+                                wanted.start,
+                            )?;
+                            if let Some(a) = at.filter(|a| a.scope == attribute.scope) {
+                                part.frame_attributes.push(vec![a]);
+                            }
+                            part.attributes.push(attribute);
+                            continue;
+                        }
                         let mut values = vec![attribute.clone()];
                         for index in 1..sample_count {
                             let at = self.geom_param(
