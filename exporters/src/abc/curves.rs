@@ -7,6 +7,8 @@
 //! archive metadata, since Alembic has no unit field), Y up, the axis every
 //! Alembic reader assumes: the groom is rotated to Y up before writing. The
 //! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
+//! A guide cache ([`guide_cache`]) holds two curves objects instead,
+//! `/groom/guides` (animated) and `/groom/render` (at rest).
 
 mod guide_cache;
 mod sequence;
