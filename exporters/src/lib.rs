@@ -244,6 +244,37 @@ pub fn animated_as(
     }))
 }
 
+/// The extensions a guide cache ([`guide_cache`]) is written to.
+pub const GUIDE_CACHE_EXTENSIONS: &[&str] = &["abc", "usdc", "usd"];
+
+/// Starts a guide cache: the guides of `groom` animated, its render hair
+/// (per-strand `groom_guide` 0, after the guides) at rest with the guides
+/// and weights it follows (`groom_closest_guides`, `groom_guide_weights`).
+/// Each frame gives the guides' points only. Alembic in the layout of
+/// Unreal's *Guides* groom cache ([`abc::curves::guide_cache`]), USD crate
+/// files as `guides` and `render` prims ([`usd::guide_cache`]).
+pub fn guide_cache(
+    path: &Path,
+    groom: &Groom,
+    options: AnimationOptions,
+    attributes: AttributeSet,
+) -> Result<Box<dyn FrameWriter>, ExportError> {
+    check_exportable(path, groom)?;
+    let inner = match extension_of(path).as_str() {
+        "abc" => abc::guide_cache(path, groom, options, attributes),
+        "usdc" | "usd" => usd::guide_cache(path, groom, options),
+        _ => Err(ExportError::Unsupported {
+            file: path.to_path_buf(),
+            message: "a guide cache is written to .abc, .usdc or .usd".into(),
+        }),
+    }?;
+    Ok(Box::new(CheckedFrames {
+        path: path.to_path_buf(),
+        frames: 0,
+        inner,
+    }))
+}
+
 /// The units a file at `path` is written in when the user names none (the
 /// units rule in [`groom::Units`]' module): glTF in metres (its
 /// specification), USD in the groom's own units (it records them), `.abc`

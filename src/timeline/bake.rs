@@ -381,6 +381,7 @@ pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
 pub fn prepare(timeline: &Timeline, seed_override: Option<u64>) -> Result<Prepared, BakeError> {
     let seed = seed_override.or(timeline.file.seed).unwrap_or(0);
     let (groom, render) = super::render::split_or_grow(timeline, load_groom(timeline)?, seed)?;
+    super::cache::check_render_hair(timeline, render.is_some())?;
     let material = material_of(timeline);
     // A groom written by a `state` export continues where it stopped; any
     // other starts fresh (bond rates and wetness taken where present).
@@ -569,6 +570,8 @@ struct AnimatedExport {
     frame_count: usize,
     units: Units,
     up: UpAxis,
+    /// A guide cache: frames give the guides' points only.
+    guides_only: bool,
 }
 
 /// What export `index` is written as: its `units`/`up`, else its `target`'s
@@ -1025,7 +1028,13 @@ impl<'a> BakeRun<'a> {
             );
             let mut base = delivery.groom(self.render.as_ref(), &guides);
             base.convert_to(units, up);
-            let writer = exporters::animated_as(
+            let guides_only = super::cache::cache_of(e) == super::cache::CacheMode::Guides;
+            let open = if guides_only {
+                exporters::guide_cache
+            } else {
+                exporters::animated_as
+            };
+            let writer = open(
                 &self.staged[index],
                 &base,
                 exporters::AnimationOptions { fps, frame_count },
@@ -1040,6 +1049,7 @@ impl<'a> BakeRun<'a> {
                 frame_count,
                 units,
                 up,
+                guides_only,
             });
         }
         Ok(())
@@ -1063,11 +1073,17 @@ impl<'a> BakeRun<'a> {
                 if due > self.step_index {
                     break;
                 }
-                let mut points = a
-                    .delivery
-                    .points(self.render.as_ref(), self.strands.positions());
+                let mut points = if a.guides_only {
+                    self.strands.positions().to_vec()
+                } else {
+                    a.delivery
+                        .points(self.render.as_ref(), self.strands.positions())
+                };
                 groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
                 let attributes = guides.as_ref().map_or_else(Vec::new, |g| {
+                    if a.guides_only {
+                        return super::frame_attributes::of_guides(g, &self.frame_attributes);
+                    }
                     super::frame_attributes::delivered(
                         &a.delivery,
                         self.render.as_ref(),

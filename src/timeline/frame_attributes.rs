@@ -58,3 +58,11 @@ pub fn delivered(
         .filter_map(|name| groom.attribute(name).cloned())
         .collect()
 }
+
+/// The values of `names` on the guides alone (a guide cache's frames).
+pub fn of_guides(guides: &Groom, names: &[&str]) -> Vec<Attribute> {
+    names
+        .iter()
+        .filter_map(|name| guides.attribute(name).cloned())
+        .collect()
+}

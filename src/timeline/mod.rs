@@ -4,6 +4,7 @@
 
 mod applies;
 pub mod bake;
+pub mod cache;
 pub mod drying;
 pub mod fibre;
 pub mod frame_attributes;
@@ -471,6 +472,7 @@ impl Timeline {
                 }
             }
             render::check_export(self, e)?;
+            cache::check_export(self, e)?;
         }
         if let Some(preview) = &f.preview {
             let path = Path::new(preview.sheet.get_ref());

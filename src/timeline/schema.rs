@@ -610,4 +610,7 @@ pub struct ExportSpec {
     pub resample: Option<Spanned<f32>>,
     /// Write cubic curves: `catmull_rom` or `bspline` (default: polylines).
     pub curves: Option<Spanned<String>>,
+    /// What an animated export stores per frame: `full` (every strand,
+    /// the default) or `guides` (a guide cache, `super::cache`).
+    pub cache: Option<Spanned<String>>,
 }

@@ -16,6 +16,7 @@ mod diff;
 mod formats;
 mod golden;
 mod guard_rails;
+mod guide_cache;
 mod guides;
 mod hardening;
 mod hold;

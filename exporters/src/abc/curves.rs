@@ -7,12 +7,18 @@
 //! archive metadata, since Alembic has no unit field), Y up, the axis every
 //! Alembic reader assumes: the groom is rotated to Y up before writing. The
 //! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
+//! A guide cache ([`guide_cache`]) holds two curves objects instead,
+//! `/groom/guides` (animated) and `/groom/render` (at rest).
 
+mod guide_cache;
 mod sequence;
 
+pub use guide_cache::guide_cache;
 pub use sequence::write_sequence;
 
-use super::archive::{metadata, ArchiveWriter, Pod, PropertyKind, PropertyWriter, TimeSampling};
+use super::archive::{
+    metadata, ArchiveWriter, ClosedObject, Pod, PropertyKind, PropertyWriter, TimeSampling,
+};
 use crate::{AnimationOptions, AttributeSet, ExportError, FrameWriter};
 use groom::{AtomicFile, AttributeValues, CurveBasis, Frame, Groom, Scope, Units, UpAxis};
 use std::path::{Path, PathBuf};
@@ -112,6 +118,12 @@ struct CurvesExport {
     source_up: UpAxis,
     fps: Option<f64>,
     times: Vec<f64>,
+    /// The name of the animated curves object (`curves`; `guides` in a
+    /// guide cache).
+    object_name: &'static str,
+    /// A guide cache's render hair: a second curves object beside the
+    /// animated one, its rest pose only ([`guide_cache`]).
+    rest: Option<(&'static str, Groom, AttributeSet)>,
 }
 
 /// What a child of `.arbGeomParams` holds, for a frame to give it values.
@@ -362,6 +374,8 @@ impl CurvesExport {
             source_up: groom.up_axis,
             fps,
             times: Vec::new(),
+            object_name: "curves",
+            rest: None,
         })
     }
 
@@ -612,37 +626,19 @@ impl CurvesExport {
             self.archive.set_time_sampling(1, sampling);
         }
         let archive = &mut self.archive;
-        // The reference schema's order: bounds, points, topology, then the
-        // geometry parameters.
-        let mut geom = vec![
-            self.bounds.close(archive).map_err(&io)?,
-            self.positions.close(archive).map_err(&io)?,
-        ];
-        for property in std::mem::take(&mut self.fixed) {
-            geom.push(property.close(archive).map_err(&io)?);
+        let mut children = vec![close_curves(
+            archive,
+            self.object_name,
+            self.bounds,
+            self.positions,
+            std::mem::take(&mut self.fixed),
+            std::mem::take(&mut self.arbitrary),
+        )
+        .map_err(&io)?];
+        if let Some((name, rest, attributes)) = self.rest.take() {
+            children
+                .push(guide_cache::static_curves(archive, name, &rest, attributes).map_err(&io)?);
         }
-        let mut arbitrary = Vec::new();
-        for property in std::mem::take(&mut self.arbitrary) {
-            arbitrary.push(property.close(archive).map_err(&io)?);
-        }
-        geom.push(
-            archive
-                .close_compound(".arbGeomParams", "", arbitrary)
-                .map_err(&io)?,
-        );
-        let geom_metadata = metadata(&[("schema", CURVES_SCHEMA), ("schemaBaseType", GEOM_BASE)]);
-        let geom = archive
-            .close_compound(".geom", &geom_metadata, geom)
-            .map_err(&io)?;
-        let title = format!("{CURVES_SCHEMA}:.geom");
-        let curves_metadata = metadata(&[
-            ("schema", CURVES_SCHEMA),
-            ("schemaBaseType", GEOM_BASE),
-            ("schemaObjTitle", &title),
-        ]);
-        let curves = archive
-            .close_object("curves", &curves_metadata, vec![geom], Vec::new())
-            .map_err(&io)?;
         let mut inherits = PropertyWriter::new(
             ".inherits",
             String::new(),
@@ -664,7 +660,7 @@ impl CurvesExport {
         let xform_metadata =
             metadata(&[("schema", XFORM_SCHEMA), ("schemaObjTitle", &xform_title)]);
         let groom = archive
-            .close_object("groom", &xform_metadata, vec![xform], vec![curves])
+            .close_object("groom", &xform_metadata, vec![xform], children)
             .map_err(&io)?;
         let application = format!("groombake {}", env!("CARGO_PKG_VERSION"));
         let alembic_version = format!(
@@ -692,6 +688,36 @@ impl CurvesExport {
             .map_err(&io)?;
         file.commit().map_err(&io)
     }
+}
+
+/// Closes a curves object: its `.geom` in the reference schema's order
+/// (bounds, points, topology, then the geometry parameters).
+fn close_curves(
+    archive: &mut ArchiveWriter<AtomicFile>,
+    name: &str,
+    bounds: PropertyWriter,
+    positions: PropertyWriter,
+    fixed: Vec<PropertyWriter>,
+    arbitrary: Vec<PropertyWriter>,
+) -> std::io::Result<ClosedObject> {
+    let mut geom = vec![bounds.close(archive)?, positions.close(archive)?];
+    for property in fixed {
+        geom.push(property.close(archive)?);
+    }
+    let mut closed = Vec::new();
+    for property in arbitrary {
+        closed.push(property.close(archive)?);
+    }
+    geom.push(archive.close_compound(".arbGeomParams", "", closed)?);
+    let geom_metadata = metadata(&[("schema", CURVES_SCHEMA), ("schemaBaseType", GEOM_BASE)]);
+    let geom = archive.close_compound(".geom", &geom_metadata, geom)?;
+    let title = format!("{CURVES_SCHEMA}:.geom");
+    let curves_metadata = metadata(&[
+        ("schema", CURVES_SCHEMA),
+        ("schemaBaseType", GEOM_BASE),
+        ("schemaObjTitle", &title),
+    ]);
+    archive.close_object(name, &curves_metadata, vec![geom], Vec::new())
 }
 
 fn width_attribute(groom: &Groom) -> Option<&groom::Attribute> {

@@ -7,7 +7,7 @@ pub mod curves;
 pub mod hashes;
 pub mod ogawa;
 
-pub use curves::{animated, write};
+pub use curves::{animated, guide_cache, write};
 #[cfg(test)]
 pub(crate) mod test_support {
     /// The bytes of a file of the workspace's `tests/data/`.

@@ -682,12 +682,14 @@ impl AnimatedCrate {
         // The arrays are in the file; `finish` needs only their reps.
         scene.forget_values();
         let prims = scene.prims.len();
+        let rest_only: Vec<bool> = scene.prims.iter().map(|p| p.rest_only).collect();
         Ok(AnimatedCrate {
             writer,
             scene,
             samples: Samples {
                 times: Vec::new(),
                 reps: (0..prims)
+                    .filter(|&k| !rest_only[k])
                     .flat_map(|k| {
                         [
                             ((k, "points".into()), Vec::new()),
@@ -715,6 +717,10 @@ impl FrameWriter for AnimatedCrate {
         }
         super::frame_values::check_names(&self.writer.path, &mut self.animated, frame)?;
         for (index, prim) in self.scene.prims.iter().enumerate() {
+            // A guide cache's render hair: its rest pose is its default.
+            if prim.rest_only {
+                continue;
+            }
             let points = prim.points_of(&frame.points);
             let points_rep = self.writer.write_float3s(&points)?;
             let extent_rep = self.writer.write_float3s(&prim.extent(&points))?;

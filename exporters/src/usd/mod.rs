@@ -10,6 +10,7 @@
 
 mod crate_writer;
 mod frame_values;
+mod guide_cache;
 mod structure;
 mod usda;
 
@@ -296,6 +297,8 @@ pub fn animated(
     }
 }
 
+pub use guide_cache::guide_cache;
+
 /// The value of one property, in the element type USD stores.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum PropertyValue {
@@ -353,6 +356,9 @@ pub(crate) struct CurvesPrim {
     /// value per [`CurvesScene::codes`] entry: a groom sequence whose
     /// topology changes over time ([`write_sequence`]).
     pub sampled: Vec<(String, Vec<PropertyValue>)>,
+    /// Written at rest only, with no time samples: the render hair of a
+    /// guide cache ([`guide_cache`]), which frames do not give.
+    pub rest_only: bool,
 }
 
 impl CurvesPrim {
@@ -651,6 +657,7 @@ fn curves_prim(
         attribute_properties,
         extent_padding,
         sampled: Vec::new(),
+        rest_only: false,
     })
 }
 
