@@ -5,6 +5,7 @@
 mod applies;
 pub mod bake;
 pub mod drying;
+mod error;
 pub mod fibre;
 pub mod frame_attributes;
 pub mod hold;
@@ -15,6 +16,7 @@ mod ranges;
 pub mod render;
 pub mod report;
 pub mod schema;
+mod shapes;
 pub mod stages;
 pub mod surfaces;
 
