@@ -57,35 +57,18 @@
 //! assert_eq!(rest.len(), strands.vertex_count());
 //! ```
 
-mod bonds;
-mod colliders;
-mod constraints;
-#[cfg(test)]
-pub(crate) mod contact_tests;
-mod direct;
+mod avx;
+pub(crate) mod contact;
 mod forces;
-mod grid;
-mod hair_friction;
-#[cfg(test)]
-mod hair_friction_tests;
-mod hold;
-#[cfg(test)]
-mod hold_tests;
 mod instructions;
-mod lanes;
 mod math;
-#[cfg(test)]
-mod physical_tests;
 mod quarantine;
 mod rest_pose;
-mod sag_free;
-#[cfg(test)]
-mod sag_free_tests;
+mod rod;
 mod state;
 mod step;
 #[cfg(test)]
 mod tests;
-mod volume;
 
 /// A fixed sequence of numbers in `[0, 1)` for tests (xorshift64*: no
 /// dependency), from `seed` (not zero).
@@ -101,9 +84,10 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
     }
 }
 
-pub use colliders::{Collider, ColliderSet};
-pub use forces::blower_reach;
-pub use hold::Hold;
+pub use contact::colliders::{Collider, ColliderSet};
+pub use contact::volume::Volumetric;
+pub use forces::blower::blower_reach;
+pub use forces::hold::Hold;
 pub use instructions::Instructions;
 pub use parry3d;
 pub use parry3d::math::Pose;
@@ -111,10 +95,9 @@ pub use quarantine::{
     contain_blowups, contain_blowups_watching, unsimulated_strands, Blowup, StrainWatch,
     MAX_STRAIN, WARN_STRAIN,
 };
-pub use sag_free::SagFreeReport;
+pub use rod::sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
-pub use volume::Volumetric;
 
 use serde::{Deserialize, Serialize};
 

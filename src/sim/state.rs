@@ -267,7 +267,7 @@ impl StrandSet {
             }
             set.init_strand(strand);
         }
-        set.groomed_fraction = super::hold::arc_fractions(&set.groomed, &set.offsets);
+        set.groomed_fraction = super::forces::hold::arc_fractions(&set.groomed, &set.offsets);
         set.groomed_frames = set.edges.iter().map(|e| e.rotation).collect();
         Ok(set)
     }

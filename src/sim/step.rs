@@ -25,25 +25,29 @@
 //! (`Solver::set_phase_clock`) each phase's time is added up for the
 //! step's report.
 
-use super::bonds::{driven_rates, reform, rest_darboux, still_rates, Drive};
 #[cfg(target_arch = "x86_64")]
-use super::bonds::{rest_eight, RatesIn};
-use super::colliders::{project, project_contact, PreparedCollider};
-use super::constraints::{
-    bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
-};
-use super::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMaterial};
+use super::avx::{eight_to_lanes, lanes_to_eight};
+use super::contact::colliders::{project, project_contact, PreparedCollider};
+use super::contact::hair_friction::{self, HairContact, HairContacts};
+use super::contact::hair_pairs::EdgeGrid;
+use super::contact::volume::VolumeGrid;
+use super::forces::blower::blower_dv;
 #[cfg(target_arch = "x86_64")]
-use super::forces::blower_dv_eight;
-use super::forces::{blower_dv, EdgeGrid};
-use super::hair_friction::{self, HairContact, HairContacts};
-use super::hold::{fold, fold_frame};
+use super::forces::blower::blower_dv_eight;
+use super::forces::hold::{fold, fold_frame};
 use super::instructions::{in_widest, Instructions};
-use super::lanes::{F64x8, Group, LaneInput, Real, LANES, WIDE};
 use super::math::{self, Quat, V3};
 use super::quarantine::all_finite;
+use super::rod::bonds::{driven_rates, reform, rest_darboux, still_rates, Drive};
+#[cfg(target_arch = "x86_64")]
+use super::rod::bonds::{rest_eight, RatesIn};
+use super::rod::constraints::{
+    bend_coefficients, bend_twist, follow_the_leader, stretch_shear, StretchCoefficients,
+};
+use super::rod::direct::{edge_flexibility, Direct, DirectInput, EdgeCompliance, RodMaterial};
+use super::rod::lanes::{Group, LaneInput, LANES};
+use super::rod::real::{F64x8, Real, WIDE};
 use super::state::{EdgeState, JointState, Rigid, RootAnchor, VertexControl};
-use super::volume::VolumeGrid;
 use super::{
     Blower, ColliderSet, Environment, Gravity, Hold, Inextensibility, Model, PhaseTimes, SimError,
     SolverParameters, StepReport, StrandSet,
@@ -903,7 +907,6 @@ fn blow(ctx: &Context<'_>, blower: &Blower, s: &StrandMut<'_>, work: &mut Work) 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn blow_eights(blower: &Blower, positions: &[V3], dt: f32, work: &mut Work) -> usize {
-    use super::lanes::{eight_to_lanes, lanes_to_eight};
     use std::arch::x86_64::*;
     let n = positions.len();
     let m = n - 1;

@@ -1187,7 +1187,7 @@ fn blower_falls_off_with_a_length_in_metres_and_not_behind_or_outside_its_cone()
         cone_half_angle,
     };
     let across = [0.0, 1.0, 0.0];
-    let dv = |b: &Blower, p: V3| super::forces::blower_dv(b, p, across, 1.0)[0];
+    let dv = |b: &Blower, p: V3| super::forces::blower::blower_dv(b, p, across, 1.0)[0];
     let on_axis = dv(&blower(0.1, None), [0.3, 0.0, 0.0]);
     let off_axis = dv(&blower(0.1, None), [0.3, 0.3, 0.0]);
     // d = 30 cm with a 10 cm length scale: (3 + 1)^2 = 16 times weaker.

@@ -492,7 +492,7 @@ impl WindPlan {
 mod tests {
     use super::*;
     use crate::generate::{generate, GeneratorParameters, RootLayout};
-    use crate::sim::contact_tests::max_edge_strain;
+    use crate::sim::contact::tests::max_edge_strain;
     use crate::sim::{ColliderSet, Material, Solver, SolverParameters};
 
     /// Worst `|edge / rest - 1|` while the rod (radius `rod`, along X)

@@ -39,7 +39,7 @@
 use super::grid::{
     bucket_bits, bucket_of, cells_near_segment, sort_into_buckets, unpack, Bucketed, SortScratch,
 };
-use super::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
+use crate::sim::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
 
 /// One contact of an edge of a strand with an edge of another strand.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -21,10 +21,10 @@
 //! order are fixed; the changes are only read. Buffers are kept from step
 //! to step (no allocation once warm, unless the hair's box grows).
 
-use super::instructions::{in_widest, prefetch, Instructions};
+use crate::sim::avx::eight_to_lanes;
+use crate::sim::instructions::{in_widest, prefetch, Instructions};
 #[cfg(target_arch = "x86_64")]
-use super::lanes::eight_to_lanes;
-use super::math::{is_finite3, V3};
+use crate::sim::math::{is_finite3, V3};
 use serde::{Deserialize, Serialize};
 
 /// The settings of the volumetric mode (units in the names' docs).
@@ -953,13 +953,13 @@ impl VolumeGrid {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ColliderSet, Environment, Gravity, Material, Solver, SolverParameters};
     use super::*;
+    use crate::sim::{ColliderSet, Environment, Gravity, Material, Solver, SolverParameters};
     use groom::Groom;
 
     /// A dense bundle: `side` x `side` straight strands 0.4 mm apart,
     /// hanging from roots in the XZ plane, 10 vertices over 3 cm.
-    fn bundle(side: usize) -> super::super::StrandSet {
+    fn bundle(side: usize) -> crate::sim::StrandSet {
         let strands: Vec<Vec<V3>> = (0..side * side)
             .map(|k| {
                 let (x, z) = ((k % side) as f32 * 4e-4, (k / side) as f32 * 4e-4);
@@ -968,7 +968,7 @@ mod tests {
             .collect();
         let mut groom = Groom::from_strands(strands);
         groom.units = groom::Units::METERS;
-        super::super::StrandSet::from_groom(&groom, &Material::default()).unwrap()
+        crate::sim::StrandSet::from_groom(&groom, &Material::default()).unwrap()
     }
 
     /// Mean |v_x| over the free vertices after one step of the bundle

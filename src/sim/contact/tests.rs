@@ -2,9 +2,9 @@
 //! presses the hair, the physical model's edges stay within 1 % of rest at
 //! dt 1/360. (The perm rod's wrap and roll are in timeline/stages.rs.)
 
-use super::math::{self, V3};
-use super::*;
 use crate::generate::{generate, GeneratorParameters, RootLayout};
+use crate::sim::math::{self, V3};
+use crate::sim::*;
 use parry3d::math::{Rot3, Vector};
 use parry3d::shape::SharedShape;
 
@@ -260,7 +260,7 @@ fn pillow_pinch_strain(head: SharedShape) -> (f64, usize, f32) {
 /// contact, the hair pushed 19-20 cm towards the head.
 #[test]
 fn edges_keep_their_length_while_a_pillow_pins_hair_against_the_head() {
-    let (vertices, triangles) = crate::sim::colliders::sample_head();
+    let (vertices, triangles) = crate::sim::contact::colliders::sample_head();
     let mesh = SharedShape::trimesh(vertices, triangles).unwrap();
     for (name, head) in [("ball", SharedShape::ball(0.08)), ("mesh", mesh)] {
         let (worst, touched_steps, pushed) = pillow_pinch_strain(head);
@@ -356,7 +356,7 @@ fn whip(head: SharedShape, distance: HeadDistance<'_>) -> Whip {
 fn edges_keep_their_length_while_hair_whips_onto_the_head() {
     use parry3d::query::PointQuery;
     use parry3d::shape::{TriMesh, TriMeshFlags};
-    let (vertices, triangles) = crate::sim::colliders::sample_head();
+    let (vertices, triangles) = crate::sim::contact::colliders::sample_head();
     let exact =
         TriMesh::with_flags(vertices.clone(), triangles.clone(), TriMeshFlags::ORIENTED).unwrap();
     let mesh = SharedShape::trimesh(vertices, triangles).unwrap();

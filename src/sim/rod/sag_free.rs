@@ -54,9 +54,9 @@
 //! of about 17.6 N, a strain of 1e-6; the report gives the largest tip
 //! shift it makes.
 
-use super::math::{self, V3};
-use super::step::bend_flexibility;
-use super::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
+use crate::sim::math::{self, V3};
+use crate::sim::step::bend_flexibility;
+use crate::sim::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
 
 /// The largest rest Darboux vector the start writes (`sin` of half the
 /// turn at a joint: 0.95 is a 144 degree turn). A strand whose balance
@@ -206,8 +206,13 @@ impl StrandSet {
             if prepared.is_empty() {
                 return None;
             }
-            let contact =
-                super::colliders::project_contact(&prepared, p, None, radius + SUPPORT_GAP, 0.0);
+            let contact = crate::sim::contact::colliders::project_contact(
+                &prepared,
+                p,
+                None,
+                radius + SUPPORT_GAP,
+                0.0,
+            );
             contact.normal.map(|n| (d3(n), contact.friction as f64))
         };
         let g = d3(gravity);

@@ -26,10 +26,10 @@
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::instructions::{in_widest, Instructions};
-use super::lanes::Real;
-use super::math::{Quat, V3};
-use super::state::JointState;
+use super::real::Real;
+use crate::sim::instructions::{in_widest, Instructions};
+use crate::sim::math::{Quat, V3};
+use crate::sim::state::JointState;
 
 /// The largest frame rotation one iteration applies, radians: a trust
 /// region for the linearisation, so a frame whose target jumps (a perm
@@ -138,7 +138,7 @@ const FRAME_INERTIA_SPEED: f64 = 6.0;
 
 /// The mass of an edge, kg: a cylinder of the mean radius of its ends.
 #[inline(always)]
-pub(super) fn segment_mass<T: Real>(density: T, r0: T, r1: T, length: T) -> T {
+pub(in crate::sim) fn segment_mass<T: Real>(density: T, r0: T, r1: T, length: T) -> T {
     let r = T::splat(0.5) * (r0 + r1);
     density * T::splat(std::f64::consts::PI) * r * r * length
 }
@@ -148,7 +148,7 @@ pub(super) fn segment_mass<T: Real>(density: T, r0: T, r1: T, length: T) -> T {
 /// factor `factor` of its ends; see `step.rs` `bend_flexibility` for how
 /// they make the joints' consistent flexibility.
 #[inline(always)]
-pub(super) fn edge_flexibility<T: Real>(
+pub(in crate::sim) fn edge_flexibility<T: Real>(
     material: (T, T),
     length: T,
     r0: T,

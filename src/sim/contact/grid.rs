@@ -5,7 +5,7 @@
 //! wrap-around index), in parallel and in an order that does not depend
 //! on the thread count; segments walk the cells they pass through.
 
-use super::math::V3;
+use crate::sim::math::V3;
 
 /// Cells a segment may cross in a walk; a longer one (a strand torn far
 /// beyond its rest length) is searched another way by the caller.
