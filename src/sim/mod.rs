@@ -69,6 +69,7 @@ mod state;
 mod step;
 #[cfg(test)]
 mod tests;
+mod work;
 
 /// A fixed sequence of numbers in `[0, 1)` for tests (xorshift64*: no
 /// dependency), from `seed` (not zero).

@@ -12,6 +12,7 @@ pub(crate) mod hair_friction;
 #[cfg(test)]
 mod hair_friction_tests;
 pub(crate) mod hair_pairs;
+pub(crate) mod solve;
 #[cfg(test)]
 pub(crate) mod tests;
 pub(crate) mod volume;

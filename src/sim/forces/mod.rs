@@ -7,3 +7,4 @@ pub(crate) mod blower;
 pub(crate) mod hold;
 #[cfg(test)]
 mod hold_tests;
+pub(crate) mod predict;

@@ -17,3 +17,5 @@ pub(crate) mod real;
 pub(crate) mod sag_free;
 #[cfg(test)]
 mod sag_free_tests;
+pub(crate) mod shape_memory;
+pub(crate) mod solve;

@@ -54,8 +54,8 @@
 //! of about 17.6 N, a strain of 1e-6; the report gives the largest tip
 //! shift it makes.
 
+use super::shape_memory::bend_flexibility;
 use crate::sim::math::{self, V3};
-use crate::sim::step::bend_flexibility;
 use crate::sim::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
 
 /// The largest rest Darboux vector the start writes (`sin` of half the
