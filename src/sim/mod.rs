@@ -60,6 +60,8 @@
 mod avx;
 pub(crate) mod contact;
 mod forces;
+#[cfg(test)]
+mod group_tests;
 mod instructions;
 mod math;
 mod quarantine;

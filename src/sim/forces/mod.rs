@@ -8,3 +8,5 @@ pub(crate) mod hold;
 #[cfg(test)]
 mod hold_tests;
 pub(crate) mod predict;
+#[cfg(test)]
+mod tests;

@@ -11,7 +11,7 @@
 //! moment of the hair below). The joint's generalised force on its Darboux
 //! vector follows from `G_k^T tau_k = T_k` (`G` the derivative of the
 //! Darboux vector, as in direct.rs), and the rest Darboux vectors that
-//! hold it are `Omega - A tau` with `A` the joints' flexibility (step.rs
+//! hold it are `Omega - A tau` with `A` the joints' flexibility (shape_memory.rs
 //! `bend_flexibility`): the exact equilibrium of the discrete model.
 //!
 //! The bonds hold the result: every bond kind's memory moves by the same
