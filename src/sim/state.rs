@@ -105,7 +105,7 @@ pub struct StrandSet {
     pub(crate) radii: Vec<f32>,
     /// The iteration count `stiffness_prime` was computed for (0: none).
     pub(crate) prime_iterations: u32,
-    /// The hold's targets (hold.rs): each vertex where the strands were
+    /// The hold's targets (forces/hold.rs): each vertex where the strands were
     /// made, in scalp space (the root transform carries them), and its
     /// fraction of its strand's length from the root there.
     pub(crate) groomed: Vec<V3>,

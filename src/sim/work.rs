@@ -58,7 +58,7 @@ pub(in crate::sim) struct Context<'a> {
     pub(in crate::sim) bonds_still: bool,
     pub(in crate::sim) blower: Option<Blower>,
     pub(in crate::sim) extra_acceleration: Option<&'a [V3]>,
-    /// The hold toward the groomed shape (hold.rs), when on.
+    /// The hold toward the groomed shape (forces/hold.rs), when on.
     pub(in crate::sim) hold: Option<Hold>,
     pub(in crate::sim) hydrogen_reform: Option<&'a [f32]>,
     pub(in crate::sim) hair_hair: Option<(f32, &'a EdgeGrid)>,
@@ -134,7 +134,7 @@ pub(in crate::sim) struct Work {
     pub(in crate::sim) contact_velocities: Vec<V3>,
     pub(in crate::sim) contact_friction: Vec<f32>,
     /// Per edge, the factor of its frame's inverse inertia (the hold's,
-    /// hold.rs; 1 without).
+    /// forces/hold.rs; 1 without).
     pub(in crate::sim) frame_keep: Vec<f32>,
     /// The predicted positions before any contact (the physical model's
     /// friction measures the normal push from them).

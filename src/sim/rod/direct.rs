@@ -102,10 +102,10 @@ pub struct DirectInput<'a> {
     pub q: &'a [Quat],
     /// Per vertex, 0 where it is pinned or driven, else the factor of its
     /// inverse mass: 1 for a free vertex (the solve weighs it by its mass),
-    /// `1 / (1 + k dt^2)` for one the hold pulls (hold.rs).
+    /// `1 / (1 + k dt^2)` for one the hold pulls (forces/hold.rs).
     pub free: &'a [f32],
     /// Per edge, the factor of its frame's inverse inertia: 1, or `1 / (1 +
-    /// k dt^2)` for a frame the hold pulls (hold.rs).
+    /// k dt^2)` for a frame the hold pulls (forces/hold.rs).
     pub frame_free: &'a [f32],
     /// Per vertex, the unit normal of a contact the solve must hardly move
     /// the vertex along (zero: no contact), or empty when nothing touches.

@@ -83,7 +83,7 @@ impl Work {
     /// each an exact solve of the strand's linearised compliant system.
     /// Collisions come before each solve and the solve keeps them: a
     /// touching vertex moves along the surface, and hardly across it
-    /// (`contact_normals` in direct.rs). Pinning vertices that static
+    /// (`contact_normals` in rod/direct.rs). Pinning vertices that static
     /// friction holds was tried: a strand pressed between its root and a
     /// held tip buckled into a zig-zag the Newton iterations could not
     /// follow (edges 50 % long). Coulomb friction acts once, after the
