@@ -2,7 +2,7 @@
 //! batch's merged report as one self-contained HTML page each. Pictures are
 //! embedded as base64 PNG, plots as inline SVG; the page loads nothing.
 
-use crate::batch::{BatchReport, JobStatus};
+use crate::batch::report::{BatchReport, JobStatus};
 use crate::sim::attribute_names::BOND_RATES;
 use crate::timeline::plots::PlotSample;
 use crate::timeline::report::BakeReport;

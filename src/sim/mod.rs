@@ -12,33 +12,50 @@
 //!   of vertex `e`; the tip's slot is unused.
 //! - Joint `j` (between edges `j - 1` and `j`, the bend at vertex `j`) is
 //!   stored in the slot of vertex `j`; root and tip slots are unused.
-//! - Every vertex has unit mass (inverse mass 1, the root 0); the frame of
-//!   edge `e` has inverse mass `quaternion_mass_scale / l_e^2` (METHOD G),
-//!   except the root edge's frame, which is fixed to the scalp.
+//! - Masses (physical model, the default): a vertex lumps half of each
+//!   adjacent edge's mass `rho pi r^2 l` (the density, the cross-section at
+//!   the mean fibre radius of its ends, the rest length), and the frame of
+//!   edge `e` has the inertia of its segment, `m (l^2 / 12 + r^2 / 4)`
+//!   across the tangent (with a floor) and `m r^2 / 2` about it (METHOD H,
+//!   rod/direct/constants.rs). The paper model keeps the paper's unit
+//!   masses: inverse mass 1 for a vertex, `quaternion_mass_scale / l_e^2`
+//!   for the frame of edge `e` (METHOD G). In both the root vertex and the
+//!   root edge's frame are fixed to the scalp.
 //! - Per-step order (METHOD D): forces and bond-rate changes, rest shape
 //!   (15), `iterations` x (stretch/shear, bend/twist, collisions), one
 //!   Follow-The-Leader pass, final collision pass, velocities, bond update
 //!   (17). The physical model's Newton iterations stop early for a strand
 //!   whose edges are within `SolverParameters::tolerance` (and its constants,
-//!   masses and compliances, are found in the solve's lanes, direct.rs).
+//!   masses and compliances, are found in the solve's lanes, rod/direct/).
 //!   With pairwise hair-hair and `hair_friction` (physical model) the
 //!   contacts between strands are found at the start of the step and
 //!   solved with the collider contacts, Coulomb friction included, each
-//!   strand against the others as kinematic targets (hair_friction.rs).
+//!   strand against the others as kinematic targets (contact/hair_friction.rs).
 //!   Strands run in parallel in groups of four or eight (SIMD lanes); every
 //!   strand's arithmetic is the same in any group, so results are
 //!   bit-identical for any thread count.
 //! - Before the first step the caller may solve the sag-free rest shape
-//!   (`StrandSet::make_sag_free`, sag_free.rs): the groom then stands still
+//!   (`StrandSet::make_sag_free`, rod/sag_free.rs): the groom then stands still
 //!   under gravity (physical model), except strands a lone hair cannot
 //!   hold, which `make_sag_free_checked` names.
-//! - With a hold ([`Environment::hold`], hold.rs: off unless asked for)
+//! - With a hold ([`Environment::hold`], forces/hold.rs: off unless asked for)
 //!   every free vertex is pulled toward its groomed position, carried with
 //!   the scalp, by an implicit spring folded into its prediction and its
 //!   inverse mass in the solve.
 //! - The state's velocity is the real one, `(x_new - x_old) / dt`; the
 //!   Follow-The-Leader correction (paper model) is kept apart and applied
 //!   to the next prediction only.
+//!
+//! Where things are: step.rs is the pipeline of a step (its phases named,
+//! each calling into a room, on the working copy of work.rs); `rod/` holds
+//! what acts within one strand (constraints and their SIMD lanes, the
+//! physical model's direct solve, the bonds, the sag-free start); `contact/`
+//! what a strand touches (colliders, other strands pairwise or through the
+//! hair's volume, friction); `forces/` the outside forces (gravity and drag
+//! in the prediction, the blower, the hold). Beside them: the state
+//! (state.rs), its rest pose (rest_pose.rs), the containment of strands
+//! that blow up (quarantine.rs), the choice of CPU instructions
+//! (instructions.rs, avx.rs) and the small vector algebra (math.rs).
 //!
 //! ```
 //! use groombake::sim::*;
@@ -57,35 +74,21 @@
 //! assert_eq!(rest.len(), strands.vertex_count());
 //! ```
 
-mod bonds;
-mod colliders;
-mod constraints;
-#[cfg(test)]
-pub(crate) mod contact_tests;
-mod direct;
+mod avx;
+pub(crate) mod contact;
 mod forces;
-mod grid;
-mod hair_friction;
 #[cfg(test)]
-mod hair_friction_tests;
-mod hold;
-#[cfg(test)]
-mod hold_tests;
+mod group_tests;
 mod instructions;
-mod lanes;
 mod math;
-#[cfg(test)]
-mod physical_tests;
 mod quarantine;
 mod rest_pose;
-mod sag_free;
-#[cfg(test)]
-mod sag_free_tests;
+mod rod;
 mod state;
 mod step;
 #[cfg(test)]
 mod tests;
-mod volume;
+mod work;
 
 /// A fixed sequence of numbers in `[0, 1)` for tests (xorshift64*: no
 /// dependency), from `seed` (not zero).
@@ -101,9 +104,10 @@ pub(crate) fn test_sequence(seed: u64) -> impl FnMut() -> f32 {
     }
 }
 
-pub use colliders::{Collider, ColliderSet};
-pub use forces::blower_reach;
-pub use hold::Hold;
+pub use contact::colliders::{Collider, ColliderSet};
+pub use contact::volume::Volumetric;
+pub use forces::blower::blower_reach;
+pub use forces::hold::Hold;
 pub use instructions::Instructions;
 pub use parry3d;
 pub use parry3d::math::Pose;
@@ -111,10 +115,9 @@ pub use quarantine::{
     contain_blowups, contain_blowups_watching, unsimulated_strands, Blowup, StrainWatch,
     MAX_STRAIN, WARN_STRAIN,
 };
-pub use sag_free::SagFreeReport;
+pub use rod::sag_free::SagFreeReport;
 pub use state::{attribute_names, StrandSet};
 pub use step::Solver;
-pub use volume::Volumetric;
 
 use serde::{Deserialize, Serialize};
 
@@ -373,7 +376,7 @@ pub struct SolverParameters {
     /// Coulomb friction coefficient between hairs (pairwise hair-hair,
     /// physical model; 0 - 1, 0.05 - 0.5 for real hair): with it, each
     /// contact between edges of two strands keeps them two radii apart and
-    /// sticks or slides by Coulomb's law inside the solve (hair_friction.rs).
+    /// sticks or slides by Coulomb's law inside the solve (contact/hair_friction.rs).
     /// `None` (or 0): the penalty (20) alone.
     pub hair_friction: Option<f32>,
     /// Volumetric hair-hair for dense grooms (see [`Volumetric`]); when
@@ -519,7 +522,7 @@ pub struct Environment<'a> {
     /// An extra acceleration per vertex (m/s^2, one per vertex of the
     /// strand set, in its order): the wind hook.
     pub extra_acceleration: Option<&'a [[f32; 3]]>,
-    /// The hold toward the groomed shape (hold.rs); `None`: off.
+    /// The hold toward the groomed shape (forces/hold.rs); `None`: off.
     pub hold: Option<Hold>,
     /// Hydrogen bonds re-formed this step per vertex (one per vertex of
     /// the strand set, a rate change in 0..1 added to the joint's hydrogen

@@ -1,6 +1,6 @@
 //! Containment of non-finite state: a strand's new state is checked before
 //! it is committed; a strand that fails keeps its state from before the step
-//! and is frozen (see `step.rs`), so a NaN never reaches another strand.
+//! and is frozen (see `step.rs`, `velocities` and `commit`), so a NaN never reaches another strand.
 //! Beside it the physical sanity watchdog (`contain_blowups`) freezes a
 //! strand with an edge strained beyond [`MAX_STRAIN`] and notes, for one
 //! warning per stage, those beyond [`WARN_STRAIN`] ([`StrainWatch`]).

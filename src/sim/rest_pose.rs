@@ -2,8 +2,8 @@
 //! and nothing touching it, rebuilt from the rest Darboux vectors (15) and
 //! rest lengths, integrating the frames from the fixed root to the tip.
 
-use super::bonds::rest_darboux;
 use super::math::{self, V3};
+use super::rod::bonds::rest_darboux;
 use super::StrandSet;
 
 impl StrandSet {

@@ -105,7 +105,7 @@ pub struct StrandSet {
     pub(crate) radii: Vec<f32>,
     /// The iteration count `stiffness_prime` was computed for (0: none).
     pub(crate) prime_iterations: u32,
-    /// The hold's targets (hold.rs): each vertex where the strands were
+    /// The hold's targets (forces/hold.rs): each vertex where the strands were
     /// made, in scalp space (the root transform carries them), and its
     /// fraction of its strand's length from the root there.
     pub(crate) groomed: Vec<V3>,
@@ -267,7 +267,7 @@ impl StrandSet {
             }
             set.init_strand(strand);
         }
-        set.groomed_fraction = super::hold::arc_fractions(&set.groomed, &set.offsets);
+        set.groomed_fraction = super::forces::hold::arc_fractions(&set.groomed, &set.offsets);
         set.groomed_frames = set.edges.iter().map(|e| e.rotation).collect();
         Ok(set)
     }

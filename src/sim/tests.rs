@@ -11,7 +11,7 @@ const EDGE: f32 = 0.01;
 
 /// A strand of `edges` 1 cm edges from the origin, turning by `angle`
 /// (degrees) about +Z at every joint, starting along +X.
-fn arc_points(edges: usize, angle_degrees: f32) -> Vec<V3> {
+pub(crate) fn arc_points(edges: usize, angle_degrees: f32) -> Vec<V3> {
     let step = angle_degrees.to_radians();
     let mut p = [0.0f32; 3];
     let mut points = vec![p];
@@ -23,31 +23,31 @@ fn arc_points(edges: usize, angle_degrees: f32) -> Vec<V3> {
     points
 }
 
-fn groom_of(points: Vec<V3>) -> Groom {
+pub(crate) fn groom_of(points: Vec<V3>) -> Groom {
     metres(Groom::from_strands([points]))
 }
 
-fn metres(mut groom: Groom) -> Groom {
+pub(crate) fn metres(mut groom: Groom) -> Groom {
     groom.units = groom::Units::METERS;
     groom
 }
 
 /// The paper's `k_o` model (000 §4), for the tests of its own behaviour.
-fn paper() -> Material {
+pub(crate) fn paper() -> Material {
     Material {
         model: Model::Paper,
         ..Material::default()
     }
 }
 
-fn quiet() -> Environment<'static> {
+pub(crate) fn quiet() -> Environment<'static> {
     Environment {
         gravity: Gravity::Off,
         ..Environment::default()
     }
 }
 
-fn run(solver: &mut Solver, set: &mut StrandSet, env: &Environment<'_>, seconds: f32) {
+pub(crate) fn run(solver: &mut Solver, set: &mut StrandSet, env: &Environment<'_>, seconds: f32) {
     let steps = (seconds / solver.parameters().dt).round() as usize;
     let colliders = ColliderSet::new();
     for _ in 0..steps {
@@ -457,7 +457,7 @@ fn no_nan_for_any_step_and_stiffness() {
     }
 }
 
-fn head_and_pillow() -> ColliderSet {
+pub(crate) fn head_and_pillow() -> ColliderSet {
     let mut colliders = ColliderSet::new();
     colliders.insert(Collider::new(
         "head",
@@ -763,303 +763,6 @@ fn bad_input_is_refused_with_a_reason() {
 }
 
 #[test]
-fn simd_groups_match_strands_stepped_alone_bit_for_bit() {
-    // SIMD groups run the paper model's sweep in f32 lanes.
-    assert_groups_match_strands_alone(&paper(), 80, 13, 3, 0.0);
-}
-
-#[test]
-fn physical_simd_groups_match_strands_stepped_alone_bit_for_bit() {
-    // And the physical model's direct solve in f64x4 lanes.
-    assert_groups_match_strands_alone(&Material::default(), 40, 13, 3, 0.0);
-}
-
-#[test]
-fn physical_wide_groups_match_strands_stepped_alone_bit_for_bit() {
-    // 19 strands of one length: two groups of eight (f64x8 lanes where
-    // the CPU has AVX-512, else four of four) and three alone. The step
-    // has a bond drive and a blower: the groups of eight find their rest
-    // shapes in lanes (`rest_eight`, driven), and the blower of each
-    // strand's first 24 vertices goes eight at a time (`blow_eights`).
-    assert_groups_match_strands_alone(&Material::default(), 40, 19, 1, 0.0);
-}
-
-#[test]
-fn physical_wide_groups_in_a_still_step_match_strands_stepped_alone_bit_for_bit() {
-    // With no drive and no blower the groups of eight find their rest
-    // shapes joint by joint in lanes (`rest_eight`, still); some bonds are
-    // broken, so the rest shapes mix memory and current shape.
-    assert_groups_match_strands_alone_in(&Material::default(), 40, 19, 1, 0.0, true, WIDEST);
-}
-
-#[test]
-fn physical_groups_in_avx2_match_strands_stepped_alone_bit_for_bit() {
-    // What a CPU with AVX2 but not AVX-512 runs (checked on any CPU with
-    // AVX2): groups of four in f64x4 lanes and the per-strand phases
-    // compiled for AVX2, driven (with a blower) and still.
-    if !Instructions::of_this_cpu().avx2() {
-        eprintln!("no AVX2 on this CPU: no AVX2 path to test");
-        return;
-    }
-    for still in [false, true] {
-        let (material, avx2) = (&Material::default(), Instructions::Avx2);
-        assert_groups_match_strands_alone_in(material, 40, 19, 1, 0.0, still, avx2);
-    }
-}
-
-#[test]
-fn strands_that_converge_first_keep_their_state_while_their_group_iterates() {
-    // With a Newton tolerance strands stop after different counts: those
-    // that converged keep their state bit for bit while the others of their
-    // lane group iterate (and those hitting the head get their extra solve),
-    // so each still gets what it gets alone.
-    // (Tighter than the default, so these gently moving strands need
-    // different counts.)
-    let solves = assert_groups_match_strands_alone(&Material::default(), 40, 19, 1, 1e-6);
-    eprintln!("{solves} solves of 19 strands in 40 steps");
-    // Some strands stopped early and some did not (5 iterations at most,
-    // plus one after a contact).
-    assert!(
-        solves > 19 * 40 && solves < 19 * 40 * 5,
-        "{solves} solves of 19 strands in 40 steps"
-    );
-}
-
-/// `count` strands, the `i`-th shortened by `i % lengths` vertices, with
-/// the Newton `tolerance`. Returns the grouped run's solves.
-fn assert_groups_match_strands_alone(
-    material: &Material,
-    steps: usize,
-    count: usize,
-    lengths: usize,
-    tolerance: f32,
-) -> u64 {
-    assert_groups_match_strands_alone_in(material, steps, count, lengths, tolerance, false, WIDEST)
-}
-
-/// Any instructions this CPU has (the cap of `with_instructions_at_most`).
-const WIDEST: Instructions = Instructions::Avx512;
-
-/// [`assert_groups_match_strands_alone`], in a `still` step (no bond
-/// drive, no blower: the rest shape's still path) with some bonds broken,
-/// or with a drive, a blower and a hold; the groups in at most `widest`
-/// instructions.
-fn assert_groups_match_strands_alone_in(
-    material: &Material,
-    steps: usize,
-    count: usize,
-    lengths: usize,
-    tolerance: f32,
-    still: bool,
-    widest: Instructions,
-) -> u64 {
-    // Mixed lengths (13 strands of 25, 24 and 23 vertices: sorted into three
-    // uniform groups and one single) plus every force.
-    let mut strands = Vec::new();
-    for (i, strand) in generate(&GeneratorParameters {
-        strands: count,
-        shape: StrandShape::Wavy,
-        ..Default::default()
-    })
-    .unwrap()
-    .strands()
-    .enumerate()
-    {
-        strands.push(strand[..strand.len() - i % lengths].to_vec());
-    }
-    let groom = metres(Groom::from_strands(&strands));
-    let mut grouped_set = StrandSet::from_groom(&groom, material).unwrap();
-    if still {
-        grouped_set.set_all_bond_rates(BondKind::Hydrogen, 0.4);
-        grouped_set.set_all_bond_rates(BondKind::Ionic, 0.7);
-    }
-    let mut alone_set = grouped_set.clone();
-    let parameters = SolverParameters {
-        hair_radius: 1e-3,
-        hair_hair_strength: Some(3.0),
-        tolerance,
-        ..SolverParameters::default()
-    };
-    let mut grouped = Solver::new(parameters)
-        .unwrap()
-        .with_instructions_at_most(widest);
-    // The grouped run also times its phases: the clock changes no result.
-    grouped.set_phase_clock(true);
-    let mut alone = Solver::new(parameters).unwrap().without_simd();
-    let colliders = head_and_pillow();
-    let env = if still {
-        Environment::default()
-    } else {
-        Environment {
-            blower: Some(Blower {
-                falloff_length: 1.0,
-                cone_half_angle: None,
-                from: [0.3, 0.2, 0.0],
-                to: [0.0, 0.0, 0.0],
-                strength: 6.0,
-                hydrogen_rate: 0.003,
-            }),
-            bond_rate_drive: [-0.5, 0.0, 0.0, 0.0],
-            // The hold too (ramped: a different strength per vertex).
-            hold: Some(Hold {
-                strength: 3000.0,
-                ramp: [0.2, 1.0],
-            }),
-            ..Environment::default()
-        }
-    };
-    let mut solves = 0;
-    let mut phases = PhaseTimes::default();
-    for _ in 0..steps {
-        let report = grouped.step(&mut grouped_set, &colliders, &env).unwrap();
-        solves += report.solves;
-        phases += report.phases.expect("the grouped run times its phases");
-        let alone_report = alone.step(&mut alone_set, &colliders, &env).unwrap();
-        assert_eq!(report.solves, alone_report.solves);
-        assert_eq!(alone_report.phases, None, "off by default");
-    }
-    // Every phase took time (nanoseconds summed over the steps).
-    assert!(
-        phases.forces > 0 && phases.constraints > 0 && phases.bonds > 0,
-        "{phases:?}"
-    );
-    // The whole state, bit for bit: a last-bit change in a velocity or an
-    // angular velocity need not show in the positions of the next step,
-    // and `==` would take -0.0 for 0.0.
-    assert!(state_bits(&grouped_set) == state_bits(&alone_set));
-    // They did move.
-    assert!(grouped_set.positions() != groom.points.as_slice());
-    solves
-}
-
-/// Every number of `set`'s state as bits, in a fixed order: positions,
-/// velocities and their corrections, the edges' frames, angular velocities
-/// and rest lengths, the joints' constants, bond rates and memories, the
-/// wetness.
-fn state_bits(set: &StrandSet) -> Vec<u32> {
-    let mut bits = Vec::new();
-    let mut add = |values: &[f32]| bits.extend(values.iter().map(|v| v.to_bits()));
-    for v in set
-        .positions
-        .iter()
-        .chain(&set.velocities)
-        .chain(&set.velocity_corrections)
-    {
-        add(v);
-    }
-    for e in &set.edges {
-        add(&e.rotation);
-        add(&e.angular_velocity);
-        add(&[e.rest_length]);
-    }
-    for j in &set.joints {
-        add(&[j.stiffness, j.stiffness_prime, j.cuticle]);
-        add(&j.rates);
-        for m in &j.memories {
-            add(m);
-        }
-    }
-    add(&set.wetness);
-    bits
-}
-
-#[test]
-fn a_blower_dries_hydrogen_bonds_where_it_blows() {
-    // (21): db_hyd = 0.003 |dv_w| per step while b_hyd < 1.
-    let mut set =
-        StrandSet::from_groom(&groom_of(arc_points(24, 0.0)), &Material::default()).unwrap();
-    set.set_all_bond_rates(BondKind::Hydrogen, 0.0);
-    let mut solver = Solver::new(SolverParameters::default()).unwrap();
-    let blower = Blower {
-        falloff_length: 1.0,
-        cone_half_angle: None,
-        from: [0.1, 0.0, -0.5],
-        to: [0.1, 0.0, 0.0],
-        strength: 40.0,
-        hydrogen_rate: 0.003,
-    };
-    let env = Environment {
-        gravity: Gravity::Off,
-        blower: Some(blower),
-        ..Environment::default()
-    };
-    let colliders = ColliderSet::new();
-    let before = set.positions().to_vec();
-    solver.step(&mut set, &colliders, &env).unwrap();
-    let rates = set.bond_rates(BondKind::Hydrogen);
-    // The wind is along +z, across the strand (along +x): sin(theta) = 1,
-    // d = |x - 0.1| off the axis.
-    for (j, rate) in rates.iter().enumerate().take(24).skip(1) {
-        let d = (before[j][0] - 0.1f32).abs();
-        let dv = 40.0 / ((d + 1.0) * (d + 1.0)) / 360.0;
-        assert!(
-            (rate - 0.003 * dv).abs() < 1e-7,
-            "joint {j}: {rate} vs {}",
-            0.003 * dv
-        );
-    }
-    // And it pushes the hair downwind.
-    assert!(set.positions()[24][2] > 0.0);
-}
-
-#[test]
-fn hair_hair_penalty_pushes_close_strands_apart() {
-    // Two parallel strands 1 mm apart with a 1 mm hair radius (contact
-    // below 2 mm): they separate; without the penalty they do not.
-    let a = arc_points(10, 0.0);
-    let b: Vec<V3> = a.iter().map(|p| [p[0], p[1], p[2] + 0.001]).collect();
-    let groom = metres(Groom::from_strands([a, b]));
-    let gap = |strength: Option<f32>| {
-        let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
-        let mut solver = Solver::new(SolverParameters {
-            hair_radius: 1e-3,
-            hair_hair_strength: strength,
-            ..SolverParameters::default()
-        })
-        .unwrap();
-        run(&mut solver, &mut set, &quiet(), 0.2);
-        set.positions()[21][2] - set.positions()[10][2]
-    };
-    let apart = gap(Some(5.0));
-    let untouched = gap(None);
-    eprintln!("tip gap with penalty {apart}, without {untouched}");
-    assert!((untouched - 0.001).abs() < 1e-6);
-    assert!(apart > 0.0015, "{apart}");
-}
-
-#[test]
-fn an_infinite_vertex_with_hair_hair_on_is_contained_without_harm() {
-    let groom = generate(&GeneratorParameters {
-        strands: 12,
-        ..Default::default()
-    })
-    .unwrap();
-    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
-    let bad = set.strand_range(5).unwrap();
-    set.positions_mut()[bad.start + 7] = [f32::INFINITY, 0.0, f32::NEG_INFINITY];
-    let mut solver = Solver::new(SolverParameters {
-        hair_radius: 1e-3,
-        hair_hair_strength: Some(5.0),
-        ..SolverParameters::default()
-    })
-    .unwrap();
-    let report = solver
-        .step(&mut set, &head_and_pillow(), &Environment::default())
-        .unwrap();
-    assert_eq!(report.contained, vec![5]);
-    for _ in 0..10 {
-        let report = solver
-            .step(&mut set, &head_and_pillow(), &Environment::default())
-            .unwrap();
-        assert!(report.contained.is_empty());
-    }
-    for s in (0..12).filter(|s| *s != 5) {
-        let r = set.strand_range(s).unwrap();
-        assert!(set.positions()[r].iter().all(|p| math::is_finite3(*p)));
-    }
-}
-
-#[test]
 fn heavier_frames_make_a_stiffer_strand_under_gravity() {
     // METHOD G: a 24 cm horizontal strand of 12 edges droops far more with
     // w_q = w_p / l^2 (scale 1) than with heavier frames.
@@ -1174,33 +877,6 @@ fn set_invariants_hold_with_gravity_on_during_release() {
         (0.28 + 0.2 * 0.20) / (1.0 - 0.35),
         0.02,
     );
-}
-
-#[test]
-fn blower_falls_off_with_a_length_in_metres_and_not_behind_or_outside_its_cone() {
-    let blower = |falloff_length: f32, cone_half_angle: Option<f32>| Blower {
-        from: [0.0; 3],
-        to: [1.0, 0.0, 0.0],
-        strength: 10.0,
-        hydrogen_rate: 0.0,
-        falloff_length,
-        cone_half_angle,
-    };
-    let across = [0.0, 1.0, 0.0];
-    let dv = |b: &Blower, p: V3| super::forces::blower_dv(b, p, across, 1.0)[0];
-    let on_axis = dv(&blower(0.1, None), [0.3, 0.0, 0.0]);
-    let off_axis = dv(&blower(0.1, None), [0.3, 0.3, 0.0]);
-    // d = 30 cm with a 10 cm length scale: (3 + 1)^2 = 16 times weaker.
-    assert!(
-        (on_axis / off_axis - 16.0).abs() < 1e-3,
-        "{on_axis} {off_axis}"
-    );
-    // The paper's formula read in metres barely falls over 30 cm.
-    let paper = dv(&blower(1.0, None), [0.3, 0.3, 0.0]) / on_axis;
-    assert!((paper - 1.0 / 1.69).abs() < 1e-4, "{paper}");
-    assert_eq!(dv(&blower(0.1, None), [-0.3, 0.0, 0.0]), 0.0);
-    assert_eq!(dv(&blower(0.1, Some(30.0)), [0.3, 0.3, 0.0]), 0.0);
-    assert!(dv(&blower(0.1, Some(60.0)), [0.3, 0.3, 0.0]) > 0.0);
 }
 
 /// The `sim_velocity` a state export writes (`to_groom_attributes`).

@@ -2,10 +2,12 @@
 //! through every stage, streams animated exports, writes the final, rest
 //! and state exports, and reports.
 
-use super::motion::{pose_at, Pose as KeyPose};
+pub use super::error::BakeError;
+use super::motion::pose_at;
 use super::outputs::{self, Staging};
 use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport, WatchdogReport};
 use super::schema::{ColliderActivity, ExportWhat, ShapeSpec, StageKind};
+use super::shapes::{pose_of, shape_of};
 use super::stages::{drive_wetness, PermRods, StagePlan, WindPlan};
 use super::{Timeline, TimelineError};
 use crate::sim::{
@@ -98,60 +100,6 @@ pub struct BakeOutcome {
     pub rest: Groom,
     /// Bond rates, wetness and strain sampled every frame (the report's plots).
     pub plot_samples: Vec<super::plots::PlotSample>,
-}
-
-/// Why a bake failed.
-#[derive(Debug, thiserror::Error)]
-pub enum BakeError {
-    #[error(transparent)]
-    Timeline(#[from] TimelineError),
-    #[error(transparent)]
-    Import(#[from] importers::ImportError),
-    #[error(transparent)]
-    Export(#[from] exporters::ExportError),
-    #[error("{}: {message}", file.display())]
-    Input { file: PathBuf, message: String },
-    #[error("simulation: {0}")]
-    Simulation(#[from] sim::SimError),
-    #[error("{}: {source}", file.display())]
-    Io {
-        file: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("thread pool: {0}")]
-    Threads(String),
-    /// An output or report path that cannot be written or names the same
-    /// file as another.
-    #[error("{}: {message}", file.display())]
-    Output { file: PathBuf, message: String },
-    /// The report path cannot be written or names an output: no report
-    /// can be written, not even of the failure.
-    #[error("--report {}: {message}", file.display())]
-    Report { file: PathBuf, message: String },
-    #[error("stopped by signal {signal}; temporaries removed, no output replaced")]
-    Interrupted { signal: usize },
-    #[error(transparent)]
-    Preview(#[from] crate::preview::PreviewError),
-    #[error("the bake was interrupted")]
-    Cancelled,
-    /// A failure writing an output, naming its final path.
-    #[error("{0}")]
-    Write(String),
-}
-
-impl BakeError {
-    /// Bad input (exit 2) rather than a failure during the work (exit 1).
-    pub fn is_bad_input(&self) -> bool {
-        matches!(
-            self,
-            BakeError::Timeline(_)
-                | BakeError::Import(_)
-                | BakeError::Input { .. }
-                | BakeError::Output { .. }
-                | BakeError::Report { .. }
-        )
-    }
 }
 
 /// The likely cause of strands blowing up, and what to do: the words
@@ -303,75 +251,6 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
         }
     }
     Ok(groom)
-}
-
-pub(crate) fn shape_of(
-    timeline: &Timeline,
-    spec: &ShapeSpec,
-) -> Result<sim::parry3d::shape::SharedShape, BakeError> {
-    use sim::parry3d::math::Vector;
-    use sim::parry3d::shape::SharedShape;
-    Ok(match spec {
-        ShapeSpec::HalfSpace { normal } => {
-            SharedShape::halfspace(Vector::new(normal[0], normal[1], normal[2]).normalize())
-        }
-        ShapeSpec::Cuboid { half_extents: h } => SharedShape::cuboid(h[0], h[1], h[2]),
-        ShapeSpec::Ball { radius } => SharedShape::ball(*radius),
-        ShapeSpec::Capsule {
-            half_height,
-            radius,
-        } => SharedShape::capsule_y(*half_height, *radius),
-        ShapeSpec::Cylinder {
-            half_height,
-            radius,
-        } => SharedShape::cylinder(*half_height, *radius),
-        ShapeSpec::Mesh { path, scale } => {
-            let file = timeline.resolve(path);
-            let (vertices, triangles) = importers::mesh::read_triangles(&file)?;
-            let vertices: Vec<Vector> = vertices
-                .iter()
-                .map(|v| Vector::new(v[0] * scale, v[1] * scale, v[2] * scale))
-                .collect();
-            check_mesh_coordinates(&vertices).map_err(|message| BakeError::Input {
-                file: file.clone(),
-                message,
-            })?;
-            SharedShape::trimesh(vertices, triangles).map_err(|e| BakeError::Input {
-                file,
-                message: format!("not a usable collider mesh: {e}"),
-            })?
-        }
-    })
-}
-
-/// Refuses a collider vertex (after the mesh's scale) outside the scene's
-/// range, [`crate::budget::MAX_COORDINATE`]: its grid would be one cell
-/// holding the whole mesh, and f32 positions there cannot resolve a hair.
-fn check_mesh_coordinates(vertices: &[sim::parry3d::math::Vector]) -> Result<(), String> {
-    for (i, v) in vertices.iter().enumerate() {
-        for (c, axis) in ["x", "y", "z"].into_iter().enumerate() {
-            // Written so that NaN is outside too.
-            let inside = f64::from(v[c]).abs() <= crate::budget::MAX_COORDINATE;
-            if !inside {
-                return Err(format!(
-                    "vertex {i} has {axis} = {:e} m (after `scale`): outside \
-                     -{max:e} to {max:e} m",
-                    v[c],
-                    max = crate::budget::MAX_COORDINATE
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
-pub(crate) fn pose_of(pose: KeyPose) -> sim::Pose {
-    let t = pose.translation.map(|c| c as f32);
-    let r = pose.rotation.map(|c| c as f32);
-    sim::Pose::from_parts(
-        sim::parry3d::math::Vector::new(t[0], t[1], t[2]),
-        sim::parry3d::math::Rot3::from_xyzw(r[0], r[1], r[2], r[3]),
-    )
 }
 
 /// Imports the groom, builds the strands and colliders. Everything that can

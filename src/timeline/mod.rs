@@ -6,6 +6,7 @@ mod applies;
 pub mod bake;
 pub mod cache;
 pub mod drying;
+mod error;
 pub mod fibre;
 pub mod frame_attributes;
 pub mod hold;
@@ -16,6 +17,7 @@ mod ranges;
 pub mod render;
 pub mod report;
 pub mod schema;
+mod shapes;
 pub mod stages;
 pub mod surfaces;
 

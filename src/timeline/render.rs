@@ -8,43 +8,14 @@
 //! pictures) interpolates the render strands from the guides of that pose,
 //! one pose at a time, so memory does not grow with the frame count.
 
-use super::bake::BakeError;
+use super::error::BakeError;
 use super::schema::{ExportSpec, ExportWhat};
+pub use super::schema::{GuidesSpec, RenderSpec};
 use super::{Timeline, TimelineError};
 use groom::curves::{CurveForm, CurveMap};
 use groom::guides::{GROOM_CLOSEST_GUIDES, GROOM_GUIDE, GROOM_GUIDE_WEIGHTS, GROOM_ID};
 use groom::interpolate::{InterpolationOptions, RenderHair};
 use groom::{AttributeValues, CurveBasis, Groom, Scope};
-use serde::Deserialize;
-
-/// `[groom] guides`: which strands of a dense source are simulated.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GuidesSpec {
-    /// This many guides, spread over the scalp by root position.
-    pub count: Option<usize>,
-    /// Every K-th strand along a space-filling order of the roots.
-    pub every: Option<usize>,
-}
-
-/// `[groom] render`: render strands grown between the guides.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RenderSpec {
-    /// Number of render strands.
-    pub count: usize,
-    /// Seed of the scattering and the noise (default: the timeline's).
-    pub seed: Option<u64>,
-    /// A scalp mesh (`.obj`, `.glb`) to scatter the roots on instead of the
-    /// guides' root triangles, relative to the timeline, in metres.
-    pub scalp: Option<String>,
-    /// Pull toward the nearest guide at the tip, 0 to 1.
-    #[serde(default)]
-    pub clump: f32,
-    /// Largest random lean at the tip, metres (0 to 0.05).
-    #[serde(default)]
-    pub noise: f32,
-}
 
 /// The most render strands a timeline may ask for.
 pub const MAX_RENDER_STRANDS: usize = 2_000_000;

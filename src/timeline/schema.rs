@@ -84,9 +84,9 @@ pub struct GroomSpec {
     pub motion: Spanned<Vec<KeySpec>>,
     /// Picks guides from a dense source groom; the other strands become
     /// render strands that follow them.
-    pub guides: Option<Spanned<super::render::GuidesSpec>>,
+    pub guides: Option<Spanned<GuidesSpec>>,
     /// Grows render strands between the guides.
-    pub render: Option<Spanned<super::render::RenderSpec>>,
+    pub render: Option<Spanned<RenderSpec>>,
 }
 
 /// Bond influences `f_j` (fractions of the restoring force).
@@ -613,4 +613,33 @@ pub struct ExportSpec {
     /// What an animated export stores per frame: `full` (every strand,
     /// the default) or `guides` (a guide cache, `super::cache`).
     pub cache: Option<Spanned<String>>,
+}
+
+/// `[groom] guides`: which strands of a dense source are simulated.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GuidesSpec {
+    /// This many guides, spread over the scalp by root position.
+    pub count: Option<usize>,
+    /// Every K-th strand along a space-filling order of the roots.
+    pub every: Option<usize>,
+}
+
+/// `[groom] render`: render strands grown between the guides.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderSpec {
+    /// Number of render strands.
+    pub count: usize,
+    /// Seed of the scattering and the noise (default: the timeline's).
+    pub seed: Option<u64>,
+    /// A scalp mesh (`.obj`, `.glb`) to scatter the roots on instead of the
+    /// guides' root triangles, relative to the timeline, in metres.
+    pub scalp: Option<String>,
+    /// Pull toward the nearest guide at the tip, 0 to 1.
+    #[serde(default)]
+    pub clump: f32,
+    /// Largest random lean at the tip, metres (0 to 0.05).
+    #[serde(default)]
+    pub noise: f32,
 }

@@ -492,7 +492,7 @@ impl WindPlan {
 mod tests {
     use super::*;
     use crate::generate::{generate, GeneratorParameters, RootLayout};
-    use crate::sim::contact_tests::max_edge_strain;
+    use crate::sim::contact::tests::max_edge_strain;
     use crate::sim::{ColliderSet, Material, Solver, SolverParameters};
 
     /// Worst `|edge / rest - 1|` while the rod (radius `rod`, along X)
@@ -567,7 +567,7 @@ mod tests {
     /// Fine edges on a small rod at dt 1/360 (the perm sample): 5 mm edges
     /// of 15 cm hair on a 1 cm rod blew up at the second step (edges
     /// 25,000 % long), 4 mm at the 14th, 7.5 mm while rolling; their frames
-    /// were too light for the Newton step (step.rs `FRAME_INERTIA_SPEED`).
+    /// were too light for the Newton step (rod/direct/constants.rs `FRAME_INERTIA_SPEED`).
     /// That the set coil keeps its turns after release is the samples
     /// test's (tests/integration/samples.rs).
     #[test]

@@ -3,9 +3,10 @@
 //! colliders active then, where their motion has them, and for a snapshot
 //! during a perm the rods the hair is wound on.
 
-use super::bake::{pose_of, shape_of, BakeError};
+use super::error::BakeError;
 use super::motion::pose_at;
 use super::schema::ColliderActivity;
+use super::shapes::{pose_of, shape_of};
 use super::stages::RodCylinder;
 use super::Timeline;
 use crate::preview::Surface;

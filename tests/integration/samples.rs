@@ -201,7 +201,7 @@ fn turns_count_a_helix_and_not_a_zig_zag() {
 
 /// Also the regression of fine edges on a small rod at dt 1/360: the
 /// sample's 5 mm edges on 1 cm rods blew up at that step (the solve turned
-/// their light frames far past their edges; src/sim/step.rs
+/// their light frames far past their edges; src/sim/rod/direct/constants.rs
 /// `FRAME_INERTIA_SPEED`), so the sample ran at 1/1000.
 #[test]
 fn perm_strands_are_coils_after_release_under_gravity() {

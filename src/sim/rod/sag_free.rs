@@ -11,7 +11,7 @@
 //! moment of the hair below). The joint's generalised force on its Darboux
 //! vector follows from `G_k^T tau_k = T_k` (`G` the derivative of the
 //! Darboux vector, as in direct.rs), and the rest Darboux vectors that
-//! hold it are `Omega - A tau` with `A` the joints' flexibility (step.rs
+//! hold it are `Omega - A tau` with `A` the joints' flexibility (shape_memory.rs
 //! `bend_flexibility`): the exact equilibrium of the discrete model.
 //!
 //! The bonds hold the result: every bond kind's memory moves by the same
@@ -54,9 +54,9 @@
 //! of about 17.6 N, a strain of 1e-6; the report gives the largest tip
 //! shift it makes.
 
-use super::math::{self, V3};
-use super::step::bend_flexibility;
-use super::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
+use super::shape_memory::bend_flexibility;
+use crate::sim::math::{self, V3};
+use crate::sim::{ColliderSet, Environment, Model, SimError, Solver, SolverParameters, StrandSet};
 
 /// The largest rest Darboux vector the start writes (`sin` of half the
 /// turn at a joint: 0.95 is a 144 degree turn). A strand whose balance
@@ -206,8 +206,13 @@ impl StrandSet {
             if prepared.is_empty() {
                 return None;
             }
-            let contact =
-                super::colliders::project_contact(&prepared, p, None, radius + SUPPORT_GAP, 0.0);
+            let contact = crate::sim::contact::colliders::project_contact(
+                &prepared,
+                p,
+                None,
+                radius + SUPPORT_GAP,
+                0.0,
+            );
             contact.normal.map(|n| (d3(n), contact.friction as f64))
         };
         let g = d3(gravity);

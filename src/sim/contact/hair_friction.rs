@@ -28,7 +28,7 @@
 //!   part is cancelled while it is at most `mu` times the normal push the
 //!   contacts gave (static: the fibres stick), else reduced by that much
 //!   (kinetic). This is the colliders' position-level friction
-//!   (`Work::friction` in step.rs), which holds a strand on a slope within
+//!   (`Work::friction` in contact/solve.rs), which holds a strand on a slope within
 //!   1 % of Coulomb's rates; a contact then gets one more solve, after
 //!   which [`restick`] puts the stuck vertices back where they stuck.
 //!
@@ -39,7 +39,7 @@
 use super::grid::{
     bucket_bits, bucket_of, cells_near_segment, sort_into_buckets, unpack, Bucketed, SortScratch,
 };
-use super::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
+use crate::sim::math::{add, cross, dot, is_finite3, length, scale, sub, V3};
 
 /// One contact of an edge of a strand with an edge of another strand.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -632,7 +632,7 @@ pub(crate) struct VertexContact {
 const TOUCH_SHARE: f32 = 0.25;
 
 /// Coulomb friction at each touching vertex after the solve, as the
-/// colliders' (`Work::friction` in step.rs): the vertex's motion over the
+/// colliders' (`Work::friction` in contact/solve.rs): the vertex's motion over the
 /// step relative to the fibres it touches (at `start` when the step began,
 /// `predicted` before any contact), along their contact plane, is
 /// cancelled while it is at most `mu` times the normal push from the

@@ -1,11 +1,11 @@
 //! A uniform grid of cells in space, shared by the hair-hair searches:
-//! the pairwise penalty's vertices (forces.rs, `EdgeGrid`) and the
+//! the pairwise penalty's vertices (hair_pairs.rs, `EdgeGrid`) and the
 //! contacts between hairs with Coulomb friction (hair_friction.rs). Cells
 //! are packed into keys and counting-sorted into buckets (a spatial
 //! wrap-around index), in parallel and in an order that does not depend
 //! on the thread count; segments walk the cells they pass through.
 
-use super::math::V3;
+use crate::sim::math::V3;
 
 /// Cells a segment may cross in a walk; a longer one (a strand torn far
 /// beyond its rest length) is searched another way by the caller.

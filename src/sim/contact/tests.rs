@@ -1,10 +1,14 @@
 //! Contact that keeps edge length (issue 10, point 4): while a collider
 //! presses the hair, the physical model's edges stay within 1 % of rest at
 //! dt 1/360. (The perm rod's wrap and roll are in timeline/stages.rs.)
+//! And the pairwise hair-hair penalty: it pushes close strands apart, and
+//! a strand with an infinite vertex is contained without harm to others.
 
-use super::math::{self, V3};
-use super::*;
 use crate::generate::{generate, GeneratorParameters, RootLayout};
+use crate::sim::math::{self, V3};
+use crate::sim::tests::{arc_points, head_and_pillow, metres, quiet, run};
+use crate::sim::*;
+use groom::Groom;
 use parry3d::math::{Rot3, Vector};
 use parry3d::shape::SharedShape;
 
@@ -260,7 +264,7 @@ fn pillow_pinch_strain(head: SharedShape) -> (f64, usize, f32) {
 /// contact, the hair pushed 19-20 cm towards the head.
 #[test]
 fn edges_keep_their_length_while_a_pillow_pins_hair_against_the_head() {
-    let (vertices, triangles) = crate::sim::colliders::sample_head();
+    let (vertices, triangles) = crate::sim::contact::colliders::sample_head();
     let mesh = SharedShape::trimesh(vertices, triangles).unwrap();
     for (name, head) in [("ball", SharedShape::ball(0.08)), ("mesh", mesh)] {
         let (worst, touched_steps, pushed) = pillow_pinch_strain(head);
@@ -356,7 +360,7 @@ fn whip(head: SharedShape, distance: HeadDistance<'_>) -> Whip {
 fn edges_keep_their_length_while_hair_whips_onto_the_head() {
     use parry3d::query::PointQuery;
     use parry3d::shape::{TriMesh, TriMeshFlags};
-    let (vertices, triangles) = crate::sim::colliders::sample_head();
+    let (vertices, triangles) = crate::sim::contact::colliders::sample_head();
     let exact =
         TriMesh::with_flags(vertices.clone(), triangles.clone(), TriMeshFlags::ORIENTED).unwrap();
     let mesh = SharedShape::trimesh(vertices, triangles).unwrap();
@@ -396,4 +400,61 @@ fn edges_keep_their_length_while_hair_whips_onto_the_head() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+#[test]
+fn hair_hair_penalty_pushes_close_strands_apart() {
+    // Two parallel strands 1 mm apart with a 1 mm hair radius (contact
+    // below 2 mm): they separate; without the penalty they do not.
+    let a = arc_points(10, 0.0);
+    let b: Vec<V3> = a.iter().map(|p| [p[0], p[1], p[2] + 0.001]).collect();
+    let groom = metres(Groom::from_strands([a, b]));
+    let gap = |strength: Option<f32>| {
+        let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+        let mut solver = Solver::new(SolverParameters {
+            hair_radius: 1e-3,
+            hair_hair_strength: strength,
+            ..SolverParameters::default()
+        })
+        .unwrap();
+        run(&mut solver, &mut set, &quiet(), 0.2);
+        set.positions()[21][2] - set.positions()[10][2]
+    };
+    let apart = gap(Some(5.0));
+    let untouched = gap(None);
+    eprintln!("tip gap with penalty {apart}, without {untouched}");
+    assert!((untouched - 0.001).abs() < 1e-6);
+    assert!(apart > 0.0015, "{apart}");
+}
+
+#[test]
+fn an_infinite_vertex_with_hair_hair_on_is_contained_without_harm() {
+    let groom = generate(&GeneratorParameters {
+        strands: 12,
+        ..Default::default()
+    })
+    .unwrap();
+    let mut set = StrandSet::from_groom(&groom, &Material::default()).unwrap();
+    let bad = set.strand_range(5).unwrap();
+    set.positions_mut()[bad.start + 7] = [f32::INFINITY, 0.0, f32::NEG_INFINITY];
+    let mut solver = Solver::new(SolverParameters {
+        hair_radius: 1e-3,
+        hair_hair_strength: Some(5.0),
+        ..SolverParameters::default()
+    })
+    .unwrap();
+    let report = solver
+        .step(&mut set, &head_and_pillow(), &Environment::default())
+        .unwrap();
+    assert_eq!(report.contained, vec![5]);
+    for _ in 0..10 {
+        let report = solver
+            .step(&mut set, &head_and_pillow(), &Environment::default())
+            .unwrap();
+        assert!(report.contained.is_empty());
+    }
+    for s in (0..12).filter(|s| *s != 5) {
+        let r = set.strand_range(s).unwrap();
+        assert!(set.positions()[r].iter().all(|p| math::is_finite3(*p)));
+    }
 }

@@ -1,7 +1,7 @@
 //! Coulomb friction between hairs (issue 33, item 1): stick and slip of a
 //! strand lying across a bed of fixed parallel strands on a slope.
 
-use super::*;
+use crate::sim::*;
 
 /// What a run of [`across_a_bed`] measured.
 struct Slide {

@@ -1,7 +1,7 @@
 //! Side-chain bonds (000 §5): the rest shape from the bonds (15)-(16) and
 //! the memory update when bonds re-form (17)-(18).
 
-use super::math::{canonical_darboux, double_cover_sign, V3};
+use crate::sim::math::{canonical_darboux, double_cover_sign, V3};
 
 /// `Omega_o` of (15): intact bonds pull toward their memory, broken ones
 /// toward the current shape `omega` (`w` the real part of its Darboux
@@ -319,7 +319,7 @@ pub fn rest_eight(
     influences: &[f32; 4],
     rule: RatesIn<'_>,
 ) -> ([V3; 8], [[f32; 4]; 8], u32) {
-    use super::lanes::{eight_to_lanes, lanes_to_eight};
+    use crate::sim::avx::{eight_to_lanes, lanes_to_eight};
     use std::arch::x86_64::*;
     // SAFETY (the loads): each reads four floats of a `[f32; 4]`, or of
     // the twelve of a `[V3; 4]` (an array of arrays: contiguous).

@@ -1,7 +1,7 @@
 //! The hold: a TD's spring of every free vertex toward its groomed
 //! position, as Maya nHair's start-curve attract and Houdini Vellum's
 //! pin-to-target stiffness give (shared DECISIONS.md, the Bangs). Off
-//! unless the caller asks for it ([`Environment::hold`](super::Environment)).
+//! unless the caller asks for it ([`Environment::hold`](crate::sim::Environment)).
 //!
 //! Each edge's frame is held the same way toward its groomed frame (see
 //! [`fold_frame`]), with the strength at the edge's middle.
@@ -30,7 +30,7 @@
 //! dt 1/360), and the static balance against the rod's elastic forces
 //! and gravity is `k (x - x*) = g + f / m` whatever `dt`.
 
-use super::math::{self, Quat, V3};
+use crate::sim::math::{self, Quat, V3};
 use serde::{Deserialize, Serialize};
 
 /// The hold of one step (see the module's doc).
@@ -86,7 +86,7 @@ impl Hold {
 /// The hold folded into one free vertex's prediction `p` (see the module's
 /// doc): the new prediction, and the factor of its inverse mass.
 #[inline(always)]
-pub(super) fn fold(p: V3, target: V3, k: f32, dt: f32) -> (V3, f32) {
+pub(in crate::sim) fn fold(p: V3, target: V3, k: f32, dt: f32) -> (V3, f32) {
     let c = k * dt * dt;
     let keep = 1.0 / (1.0 + c);
     // `p + (target - p) c / (1 + c)`: the same as the weighted mean, with
@@ -103,7 +103,7 @@ pub(super) fn fold(p: V3, target: V3, k: f32, dt: f32) -> (V3, f32) {
 /// force): the new prediction (the quaternions' normalised weighted mean,
 /// the shorter way round) and the factor of its inverse inertia.
 #[inline(always)]
-pub(super) fn fold_frame(q: Quat, target: Quat, k: f32, dt: f32) -> (Quat, f32) {
+pub(in crate::sim) fn fold_frame(q: Quat, target: Quat, k: f32, dt: f32) -> (Quat, f32) {
     let c = k * dt * dt;
     let keep = 1.0 / (1.0 + c);
     let t = c * keep;
@@ -118,7 +118,7 @@ pub(super) fn fold_frame(q: Quat, target: Quat, k: f32, dt: f32) -> (Quat, f32) 
 
 /// The fraction of its groomed length from the root of every vertex of
 /// each strand (`offsets` as `StrandSet`'s), from the positions.
-pub(super) fn arc_fractions(positions: &[V3], offsets: &[usize]) -> Vec<f32> {
+pub(in crate::sim) fn arc_fractions(positions: &[V3], offsets: &[usize]) -> Vec<f32> {
     let mut fractions = vec![0.0f32; positions.len()];
     for w in offsets.windows(2) {
         let strand = &positions[w[0]..w[1]];

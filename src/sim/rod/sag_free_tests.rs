@@ -1,8 +1,8 @@
 //! The sag-free start on long combed grooms (issue 33, item 2): it must
 //! never make a shape worse than starting without it.
 
-use super::math;
-use super::*;
+use crate::sim::math;
+use crate::sim::*;
 use groom::Groom;
 use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;

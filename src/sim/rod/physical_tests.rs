@@ -2,8 +2,8 @@
 //! the answers of beam theory, computed here, at several resolutions and
 //! time steps.
 
-use super::math::{self, V3};
-use super::*;
+use crate::sim::math::{self, V3};
+use crate::sim::*;
 use groom::Groom;
 
 const E: f64 = 3.5e9;
@@ -361,7 +361,7 @@ fn strand_drifts(set: &mut StrandSet, gravity: [f32; 3], seconds: f32) -> Vec<f6
 }
 
 /// hairutil's Bangs (tests/data): millimetres, hanging along -X.
-pub(super) fn bangs() -> (Groom, [f32; 3]) {
+pub(in crate::sim) fn bangs() -> (Groom, [f32; 3]) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/hairutil_Bangs_100.hair"
@@ -493,7 +493,7 @@ fn sag_free_bangs_of_coarse_hair_all_stand_as_groomed() {
 
 #[test]
 fn an_upright_strand_beyond_greenhills_length_is_named_and_a_shorter_one_is_not() {
-    let critical = sag_free::greenhill_length(E, RADIUS, DENSITY, G);
+    let critical = super::sag_free::greenhill_length(E, RADIUS, DENSITY, G);
     // Upright (+Y) against gravity, 20 edges each, 1 cm apart.
     let upright = |length: f64, x: f32| -> Vec<V3> {
         (0..=20)

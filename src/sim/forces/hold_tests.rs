@@ -2,9 +2,9 @@
 //! strand under gravity settles `g / k` from its groomed place, whatever
 //! its mass), it follows the scalp, and it keeps the Bangs as groomed.
 
-use super::math::{self, V3};
-use super::physical_tests::bangs;
-use super::*;
+use crate::sim::math::{self, V3};
+use crate::sim::rod::physical_tests::bangs;
+use crate::sim::*;
 use groom::Groom;
 
 const G: f32 = 9.8;

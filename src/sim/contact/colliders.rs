@@ -5,8 +5,8 @@
 
 mod sdf;
 
-use super::math::{add, cross, dot, length, scale, sub, V3};
-use super::Pose;
+use crate::sim::math::{add, cross, dot, length, scale, sub, V3};
+use crate::sim::Pose;
 use parry3d::math::Vector;
 use parry3d::query::PointProjection;
 use parry3d::shape::SharedShape;

@@ -398,7 +398,7 @@ mod tests {
     use super::*;
 
     fn head() -> TriMesh {
-        let (vertices, triangles) = crate::sim::colliders::sample_head();
+        let (vertices, triangles) = crate::sim::contact::colliders::sample_head();
         TriMesh::with_flags(vertices, triangles, TriMeshFlags::ORIENTED).expect("head mesh")
     }
 
@@ -457,7 +457,7 @@ mod tests {
     /// the grid stays within its cell budget (a coarse, valid grid).
     #[test]
     fn a_vertex_near_f32_max_gives_a_bounded_grid() {
-        let (mut vertices, triangles) = crate::sim::colliders::sample_head();
+        let (mut vertices, triangles) = crate::sim::contact::colliders::sample_head();
         vertices[0].y = 3.2e38;
         let mesh = TriMesh::new(vertices, triangles).expect("mesh");
         let sdf = MeshSdf::new(&mesh).expect("within budget").expect("grid");

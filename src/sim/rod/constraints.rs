@@ -1,7 +1,7 @@
 //! The rod constraints of 000 §4.1 (PBD Cosserat rods): stretch/shear
 //! (1)-(5), bend/twist (6)-(11), and the root-to-tip inextensibility pass.
 
-use super::math::{darboux, darboux_real, double_cover_sign, qnormalize, tangent, Quat, V3};
+use crate::sim::math::{darboux, darboux_real, double_cover_sign, qnormalize, tangent, Quat, V3};
 
 /// Squared size of a stretch/shear violation too small to correct.
 pub(crate) const STRETCH_DEADBAND2: f32 = 4.0e-12;
@@ -192,8 +192,8 @@ pub fn follow_the_leader(p: &mut [V3], w: &[f32], l: &[f32], corrections: &mut [
 
 #[cfg(test)]
 mod tests {
-    use super::super::math::{self, qmul, rotation_between};
     use super::*;
+    use crate::sim::math::{self, qmul, rotation_between};
 
     #[test]
     fn stretch_shear_aligns_a_frame_with_pinned_ends() {

@@ -10,12 +10,12 @@
 //! (between frames `k - 1` and `k`; for `k = 0` between the fixed root
 //! frame and the first edge's frame, the clamp) and the stretch/shear of
 //! edge `k`. The bend/twist flexibility is tridiagonal over the joints (the
-//! consistent flexibility of step.rs `bend_flexibility`), which keeps the
+//! consistent flexibility of `bend_flexibility`, rod/shape_memory.rs), which keeps the
 //! blocks' coupling to neighbours. Each block shares unknowns only with its
 //! neighbours, so `J W J^T + alpha/dt^2` is block-tridiagonal and one
 //! Newton-XPBD iteration costs O(edges). Hand-written rather than a sparse
 //! crate: the 6x6 blocks are fixed-size and sparse in a known pattern
-//! (written out below), and the solve must not allocate per step; it runs
+//! (written out in direct/algebra.rs), and the solve must not allocate per step; it runs
 //! in f64 because hair is very stiff for its mass (the system's entries
 //! span ~1e-3 to ~1e12).
 //!
@@ -26,10 +26,19 @@
 // Dense 3x3 and 6x6 algebra reads as the formulas with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use super::instructions::{in_widest, Instructions};
-use super::lanes::Real;
-use super::math::{Quat, V3};
-use super::state::JointState;
+mod algebra;
+mod constants;
+
+use super::real::Real;
+use crate::sim::instructions::{in_widest, Instructions};
+use crate::sim::math::{Quat, V3};
+use crate::sim::state::JointState;
+use algebra::{
+    backward_substitute, build, conj, cross, forward_substitute, gather, ldlt, mul_at_v, mul_av,
+    qmul, rotation_matrix, tangent,
+};
+use constants::EdgeLane;
+pub(in crate::sim) use constants::{edge_flexibility, segment_mass};
 
 /// The largest frame rotation one iteration applies, radians: a trust
 /// region for the linearisation, so a frame whose target jumps (a perm
@@ -43,7 +52,7 @@ use super::state::JointState;
 /// against the ball head, 11 % against the mesh head at the default two
 /// iterations; 0.04 % and 0.05 % at 0.5, the same as unclamped). 0.1 was
 /// chosen for the perm before the frames' inertia floor
-/// (`FRAME_INERTIA_SPEED` in step.rs); with the floor the perm keeps 0.67
+/// (`FRAME_INERTIA_SPEED`, direct/constants.rs); with the floor the perm keeps 0.67
 /// of its rod and 1.20 of its 1.88 turns at 0.1, 0.5 and 1.0 alike.
 const MAX_TURN: f64 = 0.5;
 
@@ -67,7 +76,7 @@ type D6<T> = [T; 6];
 pub struct EdgeCompliance {
     /// Bend/twist compliance of the joint at the edge's first vertex on the
     /// Darboux vector (the diagonal of the consistent flexibility, see
-    /// `step.rs` `bend_flexibility`), 1/(N m).
+    /// `bend_flexibility`, rod/shape_memory.rs), 1/(N m).
     pub bend: f64,
     pub twist: f64,
     /// The flexibility coupling this joint's Darboux vector with the next
@@ -93,10 +102,10 @@ pub struct DirectInput<'a> {
     pub q: &'a [Quat],
     /// Per vertex, 0 where it is pinned or driven, else the factor of its
     /// inverse mass: 1 for a free vertex (the solve weighs it by its mass),
-    /// `1 / (1 + k dt^2)` for one the hold pulls (hold.rs).
+    /// `1 / (1 + k dt^2)` for one the hold pulls (forces/hold.rs).
     pub free: &'a [f32],
     /// Per edge, the factor of its frame's inverse inertia: 1, or `1 / (1 +
-    /// k dt^2)` for a frame the hold pulls (hold.rs).
+    /// k dt^2)` for a frame the hold pulls (forces/hold.rs).
     pub frame_free: &'a [f32],
     /// Per vertex, the unit normal of a contact the solve must hardly move
     /// the vertex along (zero: no contact), or empty when nothing touches.
@@ -117,74 +126,6 @@ pub struct DirectInput<'a> {
     /// The fixed frame the first edge is clamped to (the scalp's).
     pub root_frame: Quat,
     pub dt: f32,
-}
-
-/// The frames' tilt inertia is at least that of a segment this speed
-/// times `dt` long (m/s), a numerical rotary inertia that vanishes as `dt`
-/// falls. A frame of a fine edge is so light (`m l^2 / 12`) that the
-/// Newton step, which has no geometric stiffness, turned it far past its
-/// edge when both ends of a near-straight strand were held (a perm rod
-/// holding the tip, the scalp the root): 5 mm edges of a 15 cm strand
-/// on a 1 cm rod blew up at the second step at dt 1/360 (edges 25,000 %
-/// long; at dt 1/1000, or with 1 cm edges, they held), and a strand pinned
-/// 0.1 um off its length did too. The blow-up needs the frame inertia ~5x
-/// (5 mm edges), ~10x (4 mm), ~30x (3 mm) at 1/360, growing as `dt^2`; a
-/// floor of 3 m/s failed at 3 mm edges, 4 m/s held 3-5 mm edges at 1/360
-/// and 1/120; 6 m/s keeps a margin. It changes no static shape (frames
-/// carry no load) and at dt 1/1000 (the frequency test) only edges under
-/// 6 mm get heavier frames: the 5 cm cantilever's first mode moves by
-/// `(k L)^2 / 24`, about 0.1 %.
-const FRAME_INERTIA_SPEED: f64 = 6.0;
-
-/// The mass of an edge, kg: a cylinder of the mean radius of its ends.
-#[inline(always)]
-pub(super) fn segment_mass<T: Real>(density: T, r0: T, r1: T, length: T) -> T {
-    let r = T::splat(0.5) * (r0 + r1);
-    density * T::splat(std::f64::consts::PI) * r * r * length
-}
-
-/// Edge `e`'s bend and twist flexibility `l / (4 EI)`, `l / (4 GJ)` per
-/// unit of the Darboux vector (half-angles: a quarter) with the cuticle
-/// factor `factor` of its ends; see `step.rs` `bend_flexibility` for how
-/// they make the joints' consistent flexibility.
-#[inline(always)]
-pub(super) fn edge_flexibility<T: Real>(
-    material: (T, T),
-    length: T,
-    r0: T,
-    r1: T,
-    factor: T,
-) -> (T, T) {
-    let (youngs, shear) = material;
-    let r = T::splat(0.5) * (r0 + r1);
-    let r2 = r * r;
-    // A quarter by a multiplication: the same bits as dividing by 4 (a
-    // power of two), without a division.
-    let inertia = T::splat(std::f64::consts::PI) * (r2 * r2) * T::splat(0.25);
-    let four = T::splat(4.0);
-    let bend = length / (four * youngs * factor * inertia);
-    let twist = length / (four * shear * factor * T::splat(2.0) * inertia);
-    (bend, twist)
-}
-
-/// What `begin` finds of one edge before the blocks' constants.
-#[derive(Debug, Clone, Copy, Default)]
-struct EdgeLane<T> {
-    l: T,
-    /// The factor of the frame's inverse inertia (`DirectInput::frame_free`).
-    keep: T,
-    /// Half the edge's mass (each end vertex gets it).
-    half_mass: T,
-    /// The frame's inverse inertia across and about the tangent.
-    wq: T,
-    w_twist: T,
-    /// Stretch/shear compliances `l / (G A)`, `l / (E A)`.
-    shear: T,
-    stretch: T,
-    /// A third of the edge's own bend/twist flexibility
-    /// (`edge_flexibility`): what it adds to each end joint.
-    bend_third: T,
-    twist_third: T,
 }
 
 /// The constants of block `k` for a step.
@@ -341,175 +282,6 @@ impl<T: Real> Direct<T> {
         self.lambda.clear();
         self.lambda.resize(m, [T::splat(0.0); 6]);
         self.physical_constants(strands);
-    }
-
-    /// The physical model's masses, inertias and compliances (METHOD H)
-    /// from the density, moduli, fibre radii and rest lengths, in the
-    /// lanes: vertices lump half of each adjacent edge's mass `rho A l`;
-    /// frames get the inertia of their segment about its centre, `m (l^2 /
-    /// 12 + r^2 / 4)` across the tangent (a rigid segment's, a choice the
-    /// papers leave open; with a floor, `FRAME_INERTIA_SPEED`) and the
-    /// fibre's own `m r^2 / 2` about it (twist). Stiffness falls with the
-    /// cuticle from root to tip (13)-(14): an edge takes the factor of its
-    /// first joint. The inverse masses and inertias are rounded to `f32`,
-    /// the precision the strand state keeps.
-    #[inline(always)]
-    fn physical_constants(&mut self, strands: &[DirectInput<'_>]) {
-        let n = strands[0].p.len();
-        let m = n - 1;
-        let (zero, one, half) = (T::splat(0.0), T::splat(1.0), T::splat(0.5));
-        let pi = T::splat(std::f64::consts::PI);
-        let youngs: T = gather(strands, |s| s.material.youngs_modulus);
-        let shear: T = gather(strands, |s| s.material.shear_modulus);
-        let density: T = gather(strands, |s| s.material.density);
-        let arm_floor: T = gather(strands, |s| FRAME_INERTIA_SPEED * s.dt as f64);
-        // Per vertex, its radius, its joint's cuticle factor and whether
-        // it is free, and per edge its length, each read once, strand by
-        // strand (as `begin`).
-        self.vertices.clear();
-        self.vertices.resize(n, [zero; 3]);
-        self.edges.clear();
-        self.edges.resize(m, EdgeLane::default());
-        for (lane, s) in strands.iter().enumerate() {
-            let per_vertex = s.radii.iter().zip(s.joints).zip(s.free);
-            for (o, ((&radius, joint), &free)) in self.vertices.iter_mut().zip(per_vertex) {
-                o[0].set_lane(lane, radius as f64);
-                o[1].set_lane(lane, joint.cuticle as f64);
-                o[2].set_lane(lane, free as f64);
-            }
-            for ((o, &l), &keep) in self.edges.iter_mut().zip(s.l).zip(s.frame_free) {
-                o.l.set_lane(lane, l as f64);
-                o.keep.set_lane(lane, keep as f64);
-            }
-        }
-        let vertices = &self.vertices;
-        // The cuticle factor of joint slot `i` for an edge (the root edge
-        // takes joint 1's) and for the flexibility (the root is healthy;
-        // the tip has no joint of its own and takes the last one's).
-        let edge_cuticle = |k: usize| -> T {
-            if m >= 2 {
-                vertices[k.clamp(1, m - 1)][1]
-            } else {
-                one
-            }
-        };
-        let cuticle_at = |i: usize| -> T {
-            if i == 0 || m < 2 {
-                one
-            } else {
-                vertices[i.min(m - 1)][1]
-            }
-        };
-        for k in 0..m {
-            let l = self.edges[k].l;
-            let keep = self.edges[k].keep;
-            let (r0, r1) = (vertices[k][0], vertices[k + 1][0]);
-            let r = half * (r0 + r1);
-            let area = pi * r * r;
-            let segment = segment_mass(density, r0, r1, l);
-            let arm = T::gt_select(l, arm_floor, l, arm_floor);
-            let cuticle = edge_cuticle(k);
-            let factor = half * (cuticle_at(k) + cuticle_at(k + 1));
-            let (bend, twist) = edge_flexibility((youngs, shear), l, r0, r1, factor);
-            let third = T::splat(3.0);
-            self.edges[k] = EdgeLane {
-                l,
-                keep,
-                half_mass: half * segment,
-                // (`* 0.25`, `* 0.5`: the bits of `/ 4`, `/ 2`.)
-                // (`* keep`: the same bits without a hold, `keep` = 1.)
-                wq: (one / (segment * (arm * arm / T::splat(12.0) + r * r * T::splat(0.25))))
-                    .to_f32_precision()
-                    * keep,
-                w_twist: (one / (segment * r * r * half)).to_f32_precision() * keep,
-                shear: l / (shear * cuticle * area),
-                stretch: l / (youngs * cuticle * area),
-                bend_third: bend / third,
-                twist_third: twist / third,
-            };
-        }
-        // A free vertex's inverse mass: half of each adjacent edge's mass.
-        self.w.clear();
-        let edges = &self.edges;
-        for i in 0..n {
-            let free = vertices[i][2];
-            let mass = match (i.checked_sub(1), edges.get(i)) {
-                (Some(before), Some(after)) => edges[before].half_mass + after.half_mass,
-                (None, Some(after)) => zero + after.half_mass,
-                (Some(before), None) => edges[before].half_mass,
-                (None, None) => one,
-            };
-            // (`* free`: the same bits for a free vertex, `free` = 1.)
-            self.w.push(T::gt_select(
-                free,
-                zero,
-                (one / mass).to_f32_precision() * free,
-                free,
-            ));
-        }
-        let inv_dt2: T = gather(strands, |s| 1.0 / (s.dt as f64 * s.dt as f64));
-        let w = &self.w;
-        self.constants.clear();
-        for k in 0..m {
-            let e = &edges[k];
-            // The consistent flexibility: edge k - 1 and edge k each add a
-            // third of theirs to joint k, a sixth between k and k + 1.
-            let (bend_before, twist_before) = match k.checked_sub(1) {
-                Some(before) => (
-                    zero + edges[before].bend_third,
-                    zero + edges[before].twist_third,
-                ),
-                None => (zero, zero),
-            };
-            // A sixth between joints k and k + 1: half of the third, exactly
-            // (halving is exact, so `(x / 3) / 2` is `x / 6` to the bit).
-            let (bend_next, twist_next) = if k + 1 < m {
-                (e.bend_third * half, e.twist_third * half)
-            } else {
-                (zero, zero)
-            };
-            // Frame k - 1's inertia where it is free.
-            let (wq_before, w_twist_before) = match k.checked_sub(1) {
-                Some(before) => {
-                    let b = &edges[before];
-                    (
-                        T::gt_select(b.wq, zero, b.wq, zero),
-                        T::gt_select(b.wq, zero, b.w_twist, zero),
-                    )
-                }
-                None => (zero, zero),
-            };
-            self.constants.push(Constants {
-                l: e.l,
-                w_pair: w[k] + w[k + 1],
-                w_next: w[k + 1],
-                wq: e.wq,
-                dw: e.w_twist - e.wq,
-                wq_before,
-                dw_before: w_twist_before - wq_before,
-                a_sh: e.shear * inv_dt2,
-                a_st: e.stretch * inv_dt2,
-                a_b: (bend_before + e.bend_third) * inv_dt2,
-                a_t: (twist_before + e.twist_third) * inv_dt2,
-                a_b_next: bend_next * inv_dt2,
-                a_t_next: twist_next * inv_dt2,
-                rest: [zero; 3],
-                rest_w: zero,
-            });
-        }
-        for (lane, s) in strands.iter().enumerate() {
-            for (c, r) in self.constants.iter_mut().zip(s.rest) {
-                for i in 0..3 {
-                    c.rest[i].set_lane(lane, r[i] as f64);
-                }
-            }
-        }
-        // The rest's real part `sqrt(max(1 - |rest|^2, 0))`, in the lanes.
-        for c in &mut self.constants {
-            let r = c.rest;
-            let real = one - (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            c.rest_w = T::gt_select(real, zero, real, zero).sqrt();
-        }
     }
 
     /// Writes each lane's positions and frames back (f32) into
@@ -1125,181 +897,4 @@ fn bend_linearisation<T: Real>(q1: [T; 4], q2: [T; 4], rest: D3<T>, rest_w: T) -
         gg,
         g_before: [-hy, hx, hw],
     }
-}
-
-// The triangular loops below are written out row by row (by macros with
-// literal bounds) so the compiler unrolls them fully: as nested loops with
-// bounds depending on the outer index they stayed loops with index
-// arithmetic and bounds checks on the solve's critical path. The operations
-// and their order are those of the loops.
-
-/// Row `i` of the `L D L^T` factor: `L D` and `L` below the diagonal (over
-/// columns `j`), then the pivot.
-macro_rules! ldlt_row {
-    ($a:ident, $l:ident, $inv:ident, $ld:ident, $i:literal; $($j:literal)*) => {
-        $(
-            let mut s = $a[$i][$j];
-            for k in 0..$j {
-                s = s - $ld[k] * $l[($j, k)];
-            }
-            $ld[$j] = s;
-            $l[($i, $j)] = s * $inv[$j];
-        )*
-        let mut s = $a[$i][$i];
-        for k in 0..$i {
-            s = s - $ld[k] * $l[($i, k)];
-        }
-        let (zero, one) = (T::splat(0.0), T::splat(1.0));
-        $inv[$i] = one / T::gt_select(s, zero, s, one);
-    };
-}
-
-/// `L D L^T` factor of a symmetric positive definite 6x6 block given by
-/// its lower triangle: `L` unit lower (below the diagonal) and `D^-1`. A
-/// non-positive pivot (only from non-finite input) becomes 1 so the
-/// quarantine sees the NaN rather than a panic.
-#[inline(always)]
-// Row 0 (and column 0) have no terms: empty ranges from the macro.
-#[allow(clippy::reversed_empty_ranges)]
-fn ldlt<T: Real>(a: &[D6<T>; 6], l: &mut Unit<T>, inv: &mut D6<T>) {
-    // Row i of L D, below the diagonal.
-    let mut ld = [T::splat(0.0); 6];
-    ldlt_row!(a, l, inv, ld, 0;);
-    ldlt_row!(a, l, inv, ld, 1; 0);
-    ldlt_row!(a, l, inv, ld, 2; 0 1);
-    ldlt_row!(a, l, inv, ld, 3; 0 1 2);
-    ldlt_row!(a, l, inv, ld, 4; 0 1 2 3);
-    ldlt_row!(a, l, inv, ld, 5; 0 1 2 3 4);
-}
-
-/// `y_i = b_i - sum_{k < i} L_ik y_k`.
-macro_rules! forward_row {
-    ($l:ident, $y:ident, $i:literal) => {
-        for k in 0..$i {
-            $y[$i] = $y[$i] - $l[($i, k)] * $y[k];
-        }
-    };
-}
-
-/// `D^-1 L^-1 b`.
-#[inline(always)]
-fn forward_substitute<T: Real>(l: &Unit<T>, inv: &D6<T>, b: D6<T>) -> D6<T> {
-    let mut y = b;
-    forward_row!(l, y, 1);
-    forward_row!(l, y, 2);
-    forward_row!(l, y, 3);
-    forward_row!(l, y, 4);
-    forward_row!(l, y, 5);
-    build(|i| y[i] * inv[i])
-}
-
-/// `x_i = y_i - sum_{j > i} L_ji x_j`.
-macro_rules! backward_row {
-    ($l:expr, $y:ident, $x:ident, $i:literal) => {
-        let mut s = $y[$i];
-        for j in $i + 1..6 {
-            s = s - $l[(j, $i)] * $x[j];
-        }
-        $x[$i] = s;
-    };
-}
-
-/// `L^-T y`.
-#[inline(always)]
-fn backward_substitute<T: Real>(l: &Unit<T>, y: D6<T>) -> D6<T> {
-    let mut x = y;
-    backward_row!(l, y, x, 4);
-    backward_row!(l, y, x, 3);
-    backward_row!(l, y, x, 2);
-    backward_row!(l, y, x, 1);
-    backward_row!(l, y, x, 0);
-    x
-}
-
-#[inline(always)]
-fn tangent<T: Real>(q: [T; 4]) -> D3<T> {
-    let [x, y, z, w] = q;
-    let two = T::splat(2.0);
-    [
-        two * (x * z + w * y),
-        two * (y * z - w * x),
-        T::splat(1.0) - two * (x * x + y * y),
-    ]
-}
-
-#[inline(always)]
-fn rotation_matrix<T: Real>(q: [T; 4]) -> M3<T> {
-    let [x, y, z, w] = q;
-    let one = T::splat(1.0);
-    let two = T::splat(2.0);
-    [
-        [
-            one - two * (y * y + z * z),
-            two * (x * y - w * z),
-            two * (x * z + w * y),
-        ],
-        [
-            two * (x * y + w * z),
-            one - two * (x * x + z * z),
-            two * (y * z - w * x),
-        ],
-        [
-            two * (x * z - w * y),
-            two * (y * z + w * x),
-            one - two * (x * x + y * y),
-        ],
-    ]
-}
-
-#[inline(always)]
-fn qmul<T: Real>(a: [T; 4], b: [T; 4]) -> [T; 4] {
-    [
-        a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
-        a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
-        a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
-        a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
-    ]
-}
-
-#[inline(always)]
-fn conj<T: Real>(q: [T; 4]) -> [T; 4] {
-    [-q[0], -q[1], -q[2], q[3]]
-}
-
-/// `a v`.
-#[inline(always)]
-fn mul_av<T: Real>(a: &M3<T>, v: D3<T>) -> D3<T> {
-    build(|r| a[r][0] * v[0] + a[r][1] * v[1] + a[r][2] * v[2])
-}
-
-/// `a^T v`.
-#[inline(always)]
-fn mul_at_v<T: Real>(a: &M3<T>, v: D3<T>) -> D3<T> {
-    build(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
-}
-
-/// Lane `i` of a number from strand `i`.
-#[inline(always)]
-fn gather<T: Real>(strands: &[DirectInput<'_>], get: impl Fn(&DirectInput<'_>) -> f64) -> T {
-    T::gather(|i| get(&strands[i]))
-}
-
-/// `[f(0), .., f(N - 1)]`, always inlined (`array::map` and `from_fn`
-/// were not, in the hot loop).
-#[inline(always)]
-fn build<U: Copy + Default, const N: usize>(mut f: impl FnMut(usize) -> U) -> [U; N] {
-    let mut out = [U::default(); N];
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = f(i);
-    }
-    out
-}
-
-#[inline(always)]
-fn cross<T: Real>(a: D3<T>, b: D3<T>) -> D3<T> {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
