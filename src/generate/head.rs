@@ -9,7 +9,7 @@ use super::comb::{keep_off, Comb};
 use super::scalp::{angles, Root, Scalp};
 use super::variation::{self, ClumpIndex, Draw, STREAM_CLUMP, STREAM_STRAND};
 use super::{GeneratorError, GeneratorParameters, SplitMix64, CLEARANCE};
-use groom::math::double::V3;
+use groom::math::double::{dot, V3};
 use groom::{Attribute, AttributeValues, Groom, Provenance, Units, UpAxis};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -24,9 +24,9 @@ fn line(p: &GeneratorParameters, scalp: &Scalp, comb: &Comb, root: &Root, d: &Dr
     }
 }
 
-/// Clump centres: their strands (with their steps and curl phases), and
-/// the index of their roots.
-type Clumps = (Vec<(Vec<V3>, f64, f64)>, ClumpIndex);
+/// Clump centres: their strands (with their steps and curl phases), the
+/// index of their roots and the comb's direction at each.
+type Clumps = (Vec<(Vec<V3>, f64, f64)>, ClumpIndex, Vec<V3>);
 
 fn clumps(
     p: &GeneratorParameters,
@@ -50,7 +50,8 @@ fn clumps(
         })
         .collect();
     let index = ClumpIndex::new(roots.iter().map(|r| r.point).collect(), size);
-    Some((strands, index))
+    let directions = roots.iter().map(|r| comb.field(r.u)).collect();
+    Some((strands, index, directions))
 }
 
 pub(super) fn generate_head(p: &GeneratorParameters) -> Result<Groom, GeneratorError> {
@@ -67,9 +68,13 @@ pub(super) fn generate_head(p: &GeneratorParameters) -> Result<Groom, GeneratorE
         .enumerate()
         .map(|(i, root)| {
             let mut d = variation::draw(p, STREAM_STRAND, i);
-            let centre = clumps
-                .as_ref()
-                .map(|(centres, index)| &centres[index.nearest(root.point)]);
+            // The nearest centre combed the same way: never one across the
+            // parting (between the two, the clump would cut through the head).
+            let along = comb.field(root.u);
+            let centre = clumps.as_ref().and_then(|(centres, index, directions)| {
+                let same_way = |j: usize| dot(directions[j], along) > 0.5;
+                index.nearest(root.point, same_way).map(|j| &centres[j])
+            });
             // A clump's curls turn together (ringlets): its strands take
             // its phase; `curl_phase_spread` varies it from clump to clump.
             if let Some((_, _, phase)) = centre {

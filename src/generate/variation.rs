@@ -20,7 +20,9 @@
 //! Clumps (as in groom tools' clump nodes): clump centres are a second,
 //! sparser even spread of roots (one per `clump_size` squared of scalp),
 //! each growing a clump strand like any other; every strand is drawn
-//! toward the nearest centre's strand at the same arc length by
+//! toward the nearest centre's strand combed the same way (never one across
+//! the parting, where the blend would cut through the head) at the same arc
+//! length by
 //! `clump_strength (s / length)^clump_profile`, its edges then set back to
 //! their lengths along their new directions (the length is kept); it also
 //! takes its clump's curl phase, so a clump's curls turn together.
@@ -212,9 +214,10 @@ impl ClumpIndex {
         x.map(|c| (c / cell).floor() as i64)
     }
 
-    /// The nearest centre (the lowest index of equals): rings of cells
-    /// outward until one more ring cannot hold a nearer one.
-    pub fn nearest(&self, x: V3) -> usize {
+    /// The nearest centre that `accept`s (the lowest index of equals):
+    /// rings of cells outward until one more ring cannot hold a nearer
+    /// one; none beyond 64 cells.
+    pub fn nearest(&self, x: V3, accept: impl Fn(usize) -> bool) -> Option<usize> {
         let k = Self::key(x, self.cell);
         let mut best: Option<(f64, usize)> = None;
         for ring in 0..64i64 {
@@ -227,7 +230,7 @@ impl ClumpIndex {
                         let Some(list) = self.cells.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
                             continue;
                         };
-                        for &i in list {
+                        for &i in list.iter().filter(|&&i| accept(i)) {
                             let d = length(sub(self.roots[i], x));
                             if best.is_none_or(|(bd, bi)| d < bd || (d == bd && i < bi)) {
                                 best = Some((d, i));
@@ -242,14 +245,6 @@ impl ClumpIndex {
                 }
             }
         }
-        match best {
-            Some((_, i)) => i,
-            // Farther than 64 cells from every centre: the plain search.
-            None => (0..self.roots.len())
-                .min_by(|&a, &b| {
-                    length(sub(self.roots[a], x)).total_cmp(&length(sub(self.roots[b], x)))
-                })
-                .unwrap_or(0),
-        }
+        best.map(|(_, i)| i)
     }
 }
