@@ -222,8 +222,15 @@ pub fn load_groom(timeline: &Timeline) -> Result<Groom, BakeError> {
             }
             groom
         }
-        (None, Some(parameters)) => crate::generate::generate(parameters.get_ref())
-            .map_err(|e| timeline.error_at(parameters.span(), e.to_string()))?,
+        (None, Some(parameters)) => {
+            // A scalp mesh is named relative to the timeline.
+            let mut resolved = parameters.get_ref().clone();
+            if let Some(mesh) = &resolved.scalp_mesh {
+                resolved.scalp_mesh = Some(timeline.resolve(&mesh.to_string_lossy()));
+            }
+            crate::generate::generate(&resolved)
+                .map_err(|e| timeline.error_at(parameters.span(), e.to_string()))?
+        }
         (None, None) => {
             return Err(timeline
                 .error_at(0..0, "[groom] needs `source` or `generate`")

@@ -216,6 +216,12 @@ impl Timeline {
                 if let Err(e) = g.get_ref().check() {
                     return fail(g.span(), e.to_string());
                 }
+                if let Some(mesh) = &g.get_ref().scalp_mesh {
+                    let path = self.resolve(&mesh.to_string_lossy());
+                    if let Err(message) = check_input_file(&path, "scalp mesh") {
+                        return fail(g.span(), message);
+                    }
+                }
             }
         }
         if let Some(units) = &f.groom.units {

@@ -14,6 +14,7 @@ mod bench;
 mod cli;
 mod diff;
 mod formats;
+mod generate_head;
 mod golden;
 mod guard_rails;
 mod guide_cache;
