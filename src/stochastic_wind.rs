@@ -91,47 +91,66 @@ fn segment_parameters(i: usize, segments: usize) -> SegmentParameters {
     }
 }
 
-/// The nearest point of the ellipsoid surface to a point inside it.
-fn nearest_on_ellipsoid(p: [f64; 3], radii: [f64; 3]) -> [f64; 3] {
-    // x_i = p_i r_i^2 / (r_i^2 + t) with sum (x_i / r_i)^2 = 1; for an
-    // interior point t lies in (-r_min^2, 0]; F decreases in t, so bisect.
-    let f = |t: f64| -> f64 {
+impl WindHead {
+    /// `sum ((p - center) / radii)^2`: below 1 inside the ellipsoid.
+    fn level(&self, p: [f64; 3]) -> f64 {
         (0..3)
-            .map(|i| {
-                let v = p[i] * radii[i] / (radii[i] * radii[i] + t);
-                v * v
-            })
-            .sum::<f64>()
-            - 1.0
-    };
-    let r_min2 = radii.iter().map(|r| r * r).fold(f64::INFINITY, f64::min);
-    let mut low = -r_min2 * (1.0 - 1e-12);
-    let mut high = 0.0;
-    if f(low) < 0.0 {
-        // The point lies on the plane of the smallest axis's zero component:
-        // fall back to pushing out along that axis.
-        let axis = (0..3)
-            .min_by(|&a, &b| radii[a].total_cmp(&radii[b]))
-            .unwrap_or(0);
-        let mut x = p;
-        let rest: f64 = (0..3)
-            .filter(|&i| i != axis)
-            .map(|i| (p[i] / radii[i]).powi(2))
-            .sum();
-        x[axis] =
-            radii[axis] * (1.0 - rest).max(0.0).sqrt() * if p[axis] < 0.0 { -1.0 } else { 1.0 };
-        return x;
+            .map(|k| ((p[k] - self.center[k]) / self.radii[k]).powi(2))
+            .sum()
     }
-    for _ in 0..100 {
-        let mid = 0.5 * (low + high);
-        if f(mid) > 0.0 {
-            low = mid;
-        } else {
-            high = mid;
+
+    /// The unit direction, if `d` is not one, in which a segment of
+    /// `length` from `start` ends on or outside the ellipsoid: `d` turned
+    /// toward the ellipsoid's outward normal at `start` by the smallest
+    /// angle that brings the end out (the end then lies on the surface).
+    /// The paper moves an end inside to the nearest surface point (line 261
+    /// of 001_*); that point is nearer the start than the segment's length,
+    /// and stretching the segment back to its length along the same line
+    /// sends the end through the surface again. Turning toward the normal
+    /// always gets out when `start` lies on or outside the ellipsoid (it is
+    /// convex); from a start inside it, the segment points straight out.
+    fn keep_outside(&self, start: [f64; 3], d: [f64; 3], length: f64) -> Option<[f64; 3]> {
+        let end = |dir: [f64; 3]| [0, 1, 2].map(|k| start[k] + dir[k] * length);
+        if self.level(end(d)) >= 1.0 {
+            return None;
         }
+        let normal = unit([0, 1, 2].map(|k| (start[k] - self.center[k]) / self.radii[k].powi(2)))
+            .unwrap_or([0.0, 1.0, 0.0]);
+        let along = dot(d, normal);
+        // The unit vector in the plane of `d` and the normal, at right
+        // angles to `d`, toward the normal (any one when they are parallel).
+        let across = unit([0, 1, 2].map(|k| normal[k] - along * d[k]))
+            .or_else(|| unit([d[1], -d[0], 0.0]))
+            .or_else(|| unit([0.0, d[2], -d[1]]))
+            .unwrap_or([1.0, 0.0, 0.0]);
+        let turned = |angle: f64| [0, 1, 2].map(|k| angle.cos() * d[k] + angle.sin() * across[k]);
+        let full = along.clamp(-1.0, 1.0).acos();
+        if self.level(end(turned(full))) < 1.0 {
+            return Some(turned(full));
+        }
+        // The end is inside at angle 0 and outside at `full`: bisect,
+        // keeping the outside end.
+        let (mut inside, mut outside) = (0.0, full);
+        for _ in 0..60 {
+            let mid = 0.5 * (inside + outside);
+            if self.level(end(turned(mid))) < 1.0 {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        Some(turned(outside))
     }
-    let t = 0.5 * (low + high);
-    [0, 1, 2].map(|i| p[i] * radii[i] * radii[i] / (radii[i] * radii[i] + t))
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `v` scaled to unit length, or `None` if it is (nearly) zero.
+fn unit(v: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(v, v).sqrt();
+    (n > 1e-12).then(|| v.map(|x| x / n))
 }
 
 impl StochasticWind {
@@ -233,35 +252,23 @@ impl StochasticWind {
                         ph_v = 0.0;
                     }
                 }
-                let d = direction(new_theta, new_phi);
                 let length = chain.lengths[i];
-                let mut end = [
+                let mut d = direction(new_theta, new_phi);
+                // Head collision: an end inside the ellipsoid moves onto its
+                // surface, the segment keeping its length; the head stops
+                // the segment (its angular velocities are zeroed, as at the
+                // model's own angle limits), so it does not keep pushing in.
+                if let Some(turned) = head.keep_outside(start, d, length) {
+                    d = turned;
+                    (new_theta, new_phi) = angles(d);
+                    th_v = 0.0;
+                    ph_v = 0.0;
+                }
+                let end = [
                     start[0] + d[0] * length,
                     start[1] + d[1] * length,
                     start[2] + d[2] * length,
                 ];
-                // Head collision: an end inside the ellipsoid moves to the
-                // nearest point of its surface; the segment's angles follow.
-                let local = [
-                    end[0] - head.center[0],
-                    end[1] - head.center[1],
-                    end[2] - head.center[2],
-                ];
-                let inside: f64 = (0..3).map(|k| (local[k] / head.radii[k]).powi(2)).sum();
-                if inside < 1.0 {
-                    let surface = nearest_on_ellipsoid(local, head.radii);
-                    end = [0, 1, 2].map(|k| surface[k] + head.center[k]);
-                    let (t, ph) = angles([end[0] - start[0], end[1] - start[1], end[2] - start[2]]);
-                    new_theta = t;
-                    new_phi = ph;
-                    chain.lengths[i] = length;
-                    let d = direction(t, ph);
-                    end = [
-                        start[0] + d[0] * length,
-                        start[1] + d[1] * length,
-                        start[2] + d[2] * length,
-                    ];
-                }
                 chain.theta[i] = new_theta;
                 chain.phi[i] = new_phi;
                 chain.theta_velocity[i] = th_v;
@@ -376,6 +383,99 @@ mod tests {
         assert!(lifted >= 12, "wind lifted only {lifted} of 16 hairs");
     }
 
+    /// Hair combed over the head: from roots on the ellipsoid down its
+    /// meridians, each end 0.5 mm off the surface, as the head generator
+    /// lays it.
+    fn combed(head: WindHead, strands: usize, segments: usize, length: f64) -> Vec<Vec<[f64; 3]>> {
+        (0..strands)
+            .map(|k| {
+                let azimuth = k as f64 / strands as f64 * 2.0 * PI;
+                let on = |polar: f64, lift: f64| {
+                    let u = [
+                        polar.sin() * azimuth.sin(),
+                        polar.cos(),
+                        polar.sin() * azimuth.cos(),
+                    ];
+                    [0, 1, 2].map(|i| u[i] * (head.radii[i] + lift) + head.center[i])
+                };
+                let mut points = vec![on(0.3, 0.0)];
+                let mut polar = 0.3;
+                while points.len() <= segments {
+                    // March down the meridian until one segment length away.
+                    let last = *points.last().unwrap();
+                    let mut next = on(polar, 5e-4);
+                    while polar < PI
+                        && (0..3)
+                            .map(|i| (next[i] - last[i]).powi(2))
+                            .sum::<f64>()
+                            .sqrt()
+                            < length
+                    {
+                        polar += 1e-4;
+                        next = on(polar, 5e-4);
+                    }
+                    points.push(next);
+                }
+                points
+            })
+            .collect()
+    }
+
+    #[test]
+    fn hair_combed_on_the_head_never_enters_it_and_keeps_its_lengths() {
+        let head = head();
+        let strands = combed(head, 64, 20, 0.012);
+        let lengths: Vec<Vec<f64>> = strands
+            .iter()
+            .map(|s| {
+                s.windows(2)
+                    .map(|w| {
+                        (0..3)
+                            .map(|i| (w[1][i] - w[0][i]).powi(2))
+                            .sum::<f64>()
+                            .sqrt()
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut wind = StochasticWind::new(&strands, head, 5);
+        for frame in 1..=10 {
+            wind.advance(178f64.to_radians(), if frame < 6 { 0.5 } else { 0.8 });
+            for (strand, lengths) in wind.points().iter().zip(&lengths) {
+                for (w, l) in strand.windows(2).zip(lengths) {
+                    let got = (0..3)
+                        .map(|i| (w[1][i] - w[0][i]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    assert!(
+                        (got - l).abs() < 1e-9,
+                        "frame {frame}: length {got} for {l}"
+                    );
+                    assert!(
+                        head.level(w[1]) >= 1.0 - 1e-12,
+                        "frame {frame}: a segment end inside the head (level {})",
+                        head.level(w[1])
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_segment_into_the_head_turns_out_onto_its_surface() {
+        let head = head();
+        // From the top of the head, pointing straight down into it.
+        let start = [0.0, 0.1, 0.0];
+        let turned = head.keep_outside(start, [0.0, -1.0, 0.0], 0.012).unwrap();
+        let end = [0, 1, 2].map(|k| start[k] + turned[k] * 0.012);
+        assert!(
+            head.level(end) >= 1.0 && head.level(end) < 1.0 + 1e-9,
+            "{end:?}"
+        );
+        // Pointing out: unchanged.
+        assert_eq!(head.keep_outside(start, [0.0, 1.0, 0.0], 0.012), None);
+    }
+
     #[test]
     fn same_seed_same_motion() {
         let strands = vec![hanging([0.0, 0.0, 0.095], 20, 0.012)];
@@ -386,13 +486,5 @@ mod tests {
             b.advance(1.0, 0.6);
         }
         assert_eq!(a.points(), b.points());
-    }
-
-    #[test]
-    fn nearest_point_lies_on_surface() {
-        let radii = [0.08, 0.1, 0.09];
-        let q = nearest_on_ellipsoid([0.01, 0.02, 0.03], radii);
-        let on: f64 = (0..3).map(|k| (q[k] / radii[k]).powi(2)).sum();
-        assert!((on - 1.0).abs() < 1e-9);
     }
 }
