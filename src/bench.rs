@@ -314,7 +314,8 @@ impl Workload {
 
 /// Hair resting on hair for the friction bench (issue 33): `strands`
 /// strands of 24 cm real hair x `vertices`, combed down (drape 12 rad/m,
-/// as `samples/wind.toml`) from the cap of a head-size ball (radius 8 cm,
+/// as `samples/wind.toml` was before its combed head) from the cap of a
+/// head-size ball (radius 8 cm,
 /// also the collider, friction 0.3), pairwise hair-hair on (alpha 5) and
 /// `hair_friction` (`None`: frictionless), then `settle` steps of gravity
 /// without hair-hair friction, so the hair lies on the ball and on itself

@@ -37,3 +37,4 @@ mod treatments;
 mod usd;
 mod usd_structure;
 mod usd_time;
+mod wind_head;

@@ -8,7 +8,8 @@ use parry3d::math::{Pose, Vector};
 use parry3d::shape::SharedShape;
 
 /// A scalp of `length` hair combed down over a head (the groom of
-/// `samples/wind.toml`: drape 12 rad/m, 1.2 cm edges), 200 strands.
+/// `samples/wind.toml` before its combed head: drape 12 rad/m, 1.2 cm
+/// edges), 200 strands.
 fn combed_scalp(length: f32) -> Groom {
     crate::generate::generate(&crate::generate::GeneratorParameters {
         strands: 200,
