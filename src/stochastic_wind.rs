@@ -3,7 +3,11 @@
 //! accelerations around a mean that pulls them toward the wind, computed
 //! root to tip once per model frame. Wind direction and strength at each
 //! root come from 2-D potential flow around a cylinder head; an ellipsoid
-//! around the head keeps segment ends outside it.
+//! around the head keeps segment ends outside it (an end sent inside turns
+//! about its segment's start onto the surface, and the head stops that
+//! segment). The model adds no damping: over the paper's 10 frames the
+//! hair keeps moving (the mean pull, 1-2 % of the angle's distance from the
+//! wind per frame squared, takes 11-16 frames to swing a segment there).
 //!
 //! Angles: `theta` is the azimuth of a segment's XZ projection measured from
 //! +Z toward +X, `phi` the angle from -Y (hanging straight down); a negative
