@@ -1,4 +1,4 @@
-//! Groom file writers. Each module writes one format; [`write`] and
+//! Groom file writers. Each module writes one format; [`write()`] and
 //! [`animated`] pick the module from the file extension.
 //!
 //! Outputs go through [`groom::AtomicFile`]: a failed export never leaves a
@@ -134,7 +134,7 @@ pub fn write(path: &Path, groom: &Groom) -> Result<(), ExportError> {
     write_as(path, groom, AttributeSet::default())
 }
 
-/// [`write`] with the attribute names of a destination ([`Target`]).
+/// [`write()`] with the attribute names of a destination ([`Target`]).
 pub fn write_as(path: &Path, groom: &Groom, attributes: AttributeSet) -> Result<(), ExportError> {
     check_exportable(path, groom)?;
     let extension = extension_of(path);
@@ -244,7 +244,7 @@ pub fn animated_as(
     }))
 }
 
-/// The extensions a guide cache ([`guide_cache`]) is written to.
+/// The extensions a guide cache ([`guide_cache()`]) is written to.
 pub const GUIDE_CACHE_EXTENSIONS: &[&str] = &["abc", "usdc", "usd"];
 
 /// Starts a guide cache: the guides of `groom` animated, its render hair

@@ -18,7 +18,7 @@ pub const GROOM_ID: &str = "groom_id";
 pub const GROOM_GROUP_ID: &str = "groom_group_id";
 /// Per strand, three ints: the ids of the three guides a render strand
 /// follows. Held as a vec3 inside groombake (ids below 2^24 are exact in
-/// f32); the Alembic writer stores it as int32[3], as Unreal reads it.
+/// f32); the Alembic writer stores it as `int32[3]`, as Unreal reads it.
 pub const GROOM_CLOSEST_GUIDES: &str = "groom_closest_guides";
 /// Per strand, three floats: the weights of those guides (sum 1).
 pub const GROOM_GUIDE_WEIGHTS: &str = "groom_guide_weights";

@@ -5,7 +5,7 @@
 //! plus the topology, however large the file.
 //!
 //! Alembic is read this way from a memory map whose pages are released
-//! after each frame ([`crate::mapped`]). The other formats are read whole
+//! after each frame (`crate::mapped`). The other formats are read whole
 //! and their frames handed out one by one (USD's layer model and glTF's
 //! accessors decode every sample on reading; streaming them is to do).
 

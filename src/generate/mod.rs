@@ -1,16 +1,16 @@
 //! Procedural grooms, three layouts:
 //!
-//! - `scalp` and `swatch` ([`cap`]): test grooms, strands along the normal
+//! - `scalp` and `swatch` (`cap`): test grooms, strands along the normal
 //!   of an ellipsoid scalp cap (optionally draped toward -Y) or hanging from
 //!   a bar; straight or waved with the elliptic-cone spiral of Agui et al.
 //!   eq. (30)-(31). Unchanged since the samples and goldens were made.
 //! - `head`: a groom that looks like hair, built the way groom tools
 //!   (Houdini's Hair Generate and Guide Groom, XGen, Ornatrix) start one:
 //!   roots spread evenly over a scalp region bounded by a hairline
-//!   ([`scalp`]), combed along the head by a direction field with a parting
+//!   (`scalp`), combed along the head by a direction field with a parting
 //!   and a crown whorl, lying on the head before hanging down under their
-//!   own line ([`comb`]), with seeded per-strand variation of length,
-//!   width and curl and clumps ([`variation`]).
+//!   own line (`comb`), with seeded per-strand variation of length,
+//!   width and curl and clumps (`variation`).
 //!
 //! Coordinates are metres, Y up, the face toward +Z. The same parameters
 //! and seed give the same groom bit for bit, for any thread count (fixed
@@ -476,7 +476,7 @@ impl SplitMix64 {
     }
 
     /// A normal draw of mean 1 and standard deviation `spread`, clamped to
-    /// [`SPREAD_CLAMP`] deviations (and to at least 0.05).
+    /// `SPREAD_CLAMP` deviations (and to at least 0.05).
     pub fn relative(&mut self, spread: f32) -> f64 {
         let c = SPREAD_CLAMP as f64;
         (1.0 + spread as f64 * self.next_normal().clamp(-c, c)).max(0.05)

@@ -7,7 +7,7 @@
 //! archive metadata, since Alembic has no unit field), Y up, the axis every
 //! Alembic reader assumes: the groom is rotated to Y up before writing. The
 //! `groom_*` attributes are written for [`AttributeSet::WithUnreal`] only.
-//! A guide cache ([`guide_cache`]) holds two curves objects instead,
+//! A guide cache (`mod@guide_cache`) holds two curves objects instead,
 //! `/groom/guides` (animated) and `/groom/render` (at rest).
 
 mod guide_cache;
@@ -122,7 +122,7 @@ struct CurvesExport {
     /// guide cache).
     object_name: &'static str,
     /// A guide cache's render hair: a second curves object beside the
-    /// animated one, its rest pose only ([`guide_cache`]).
+    /// animated one, its rest pose only ([`mod@guide_cache`]).
     rest: Option<(&'static str, Groom, AttributeSet)>,
 }
 

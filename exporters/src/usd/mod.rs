@@ -1,10 +1,10 @@
 //! USD export: `BasisCurves` prims under an `Xform` root, written as text
-//! (`.usda`, [`usda`]) or as a binary crate file (`.usdc`/`.usd`,
-//! [`crate_writer`]). One `Strands` prim; a groom with guides and render
+//! (`.usda`, `usda`) or as a binary crate file (`.usdc`/`.usd`,
+//! `crate_writer`). One `Strands` prim; a groom with guides and render
 //! strands gets `guides` and `render`, and one that mixes curve types or
-//! wraps one prim per [`PrimKey`] (static and animated alike).
+//! wraps one prim per `PrimKey` (static and animated alike).
 //!
-//! Both writers take the same [`CurvesScene`]: the stage metadata and every
+//! Both writers take the same `CurvesScene`: the stage metadata and every
 //! property of the curves prim, sorted by name so the bytes never depend on
 //! the order attributes were added in.
 
@@ -107,7 +107,7 @@ impl PrimKey {
 }
 
 /// Whether a static or animated export of `groom` writes the prims it was
-/// read from, at their paths ([`structure`]).
+/// read from, at their paths (`structure`).
 pub fn keeps_source_prims(groom: &Groom) -> bool {
     structure::writable(groom)
 }
@@ -357,7 +357,7 @@ pub(crate) struct CurvesPrim {
     /// topology changes over time ([`write_sequence`]).
     pub sampled: Vec<(String, Vec<PropertyValue>)>,
     /// Written at rest only, with no time samples: the render hair of a
-    /// guide cache ([`guide_cache`]), which frames do not give.
+    /// guide cache ([`guide_cache()`]), which frames do not give.
     pub rest_only: bool,
 }
 

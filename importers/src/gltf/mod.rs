@@ -3,7 +3,7 @@
 //! primitives (consecutive segments that share an end vertex join into one
 //! strand); other primitives (a head mesh, points) are skipped by [`read`]
 //! and named in the groom's `provenance.losses`, as are animation channels
-//! other than the strands' morph-target weights ([`losses`]);
+//! other than the strands' morph-target weights (`losses`);
 //! [`read_triangles`] reads the triangle primitives instead, for colliders.
 //! The scene graph's transforms are applied. Morph-target animation becomes
 //! frames: frame k is the base pose plus the targets weighted by the k-th
@@ -16,11 +16,11 @@
 //! vector (or which half of an integer) the accessor holds.
 //! glTF is metres and Y up.
 //!
-//! The parts: [`document`] turns bytes into a document whose every index
+//! The parts: `document` turns bytes into a document whose every index
 //! and enum is checked where it is used (the `gltf` crate's loader panics on
-//! some bad ones), [`accessors`] reads accessor data checked against the
-//! buffers, [`scene`] walks the node graph, [`lines`] and [`triangles`]
-//! decode primitives, [`animation`] makes frames.
+//! some bad ones), `accessors` reads accessor data checked against the
+//! buffers, `scene` walks the node graph, `lines` and `triangles`
+//! decode primitives, `animation` makes frames.
 
 mod accessors;
 mod animation;

@@ -1,10 +1,10 @@
 //! USD import: `.usda` text and `.usdc` crate files (`.usd` is sniffed).
 //!
-//! Both readers fill the same small layer model ([`Stage`]: prims in
-//! depth-first order with their typed attributes); [`to_groom`] then turns
+//! Both readers fill the same small layer model (`Stage`: prims in
+//! depth-first order with their typed attributes); `to_groom` then turns
 //! every defined `BasisCurves` prim into strands, with each prim's transform
 //! (its `xformOpOrder`, composed through its parents) applied to the points.
-//! [`compose`] first follows sublayers, references, payloads, inherits and
+//! `compose` first follows sublayers, references, payloads, inherits and
 //! specializes, as either reader gives them (variants are not selected).
 
 mod compose;

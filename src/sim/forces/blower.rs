@@ -26,7 +26,7 @@ pub fn blower_dv(blower: &Blower, position: V3, edge_direction: V3, dt: f32) -> 
 
 /// How far the blower's air reaches a point, 0..1: the falloff of (19)
 /// (`1 / (d / L + 1)^2`, `d` the distance from the wind's axis), nothing
-/// behind the nozzle or outside its cone, as [`blower_dv`] pushes (without
+/// behind the nozzle or outside its cone, as `blower_dv` pushes (without
 /// the angle to the hair: air dries a fibre whatever its direction). The
 /// drying of a `dry` stage reads it (`timeline::drying`).
 pub fn blower_reach(blower: &Blower, position: V3) -> f32 {

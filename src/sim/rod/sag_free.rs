@@ -188,7 +188,7 @@ impl StrandSet {
         self.make_sag_free_supported(gravity, &ColliderSet::new(), 0.0)
     }
 
-    /// [`make_sag_free`] where the hair that rests on `colliders` (within
+    /// [`Self::make_sag_free`] where the hair that rests on `colliders` (within
     /// `SUPPORT_GAP` of a surface, for fibres of `radius`) is held by them.
     pub fn make_sag_free_supported(
         &mut self,

@@ -2,8 +2,8 @@
 //! cache. One groom Alembic holding two curves objects under `/groom`:
 //! `guides` (`groom_guide` = 1), whose `P` has a sample per frame, and
 //! `render` (`groom_guide` = 0), the render hair at rest, one sample, with
-//! `groom_closest_guides` (int32[3], guide `groom_id`s) and
-//! `groom_guide_weights` (float[3], sum 1) per curve. A reader interpolates
+//! `groom_closest_guides` (`int32[3]`, guide `groom_id`s) and
+//! `groom_guide_weights` (`float[3]`, sum 1) per curve. A reader interpolates
 //! the render hair from the animated guides (Unreal: the groom asset with
 //! imported guides, then a groom cache of import type *Guides*), so the
 //! file costs what the guides cost.
