@@ -337,6 +337,46 @@ pub fn frame_attributes_warning<S: AsRef<str>>(path: &Path, names: &[S]) -> Opti
     ))
 }
 
+/// How far a point may move by being written as a glTF morph target and
+/// read back, metres: `groombake diff`'s default tolerance.
+const MORPH_TARGET_TOLERANCE: f64 = 1e-6;
+
+/// A warning when glTF's morph targets cannot hold the frames of `groom`:
+/// a frame is written as offsets from the rest pose, in metres, f32, and a
+/// reader adds them back to the rest in f32, so a point far from its rest
+/// position (coordinates far beyond the hair's scale) comes back rounded.
+/// Computed as the writer and a reader do; `None` when every point comes
+/// back within [`MORPH_TARGET_TOLERANCE`].
+fn morph_target_rounding_warning(path: &Path, groom: &Groom) -> Option<String> {
+    let scale = groom.units.meters_per_unit as f32;
+    let metres = |p: [f32; 3]| groom.up_axis.to_y_up(p).map(|c| c * scale);
+    let mut rounded = 0usize;
+    let mut worst = 0.0f64;
+    for frame in &groom.frames {
+        for (point, rest) in frame.points.iter().zip(&groom.points) {
+            let (moved, rest) = (metres(*point), metres(*rest));
+            let error = (0..3)
+                .map(|k| {
+                    let back = rest[k] + (moved[k] - rest[k]);
+                    (f64::from(back) - f64::from(moved[k])).powi(2)
+                })
+                .sum::<f64>()
+                .sqrt();
+            if error > MORPH_TARGET_TOLERANCE {
+                rounded += 1;
+                worst = worst.max(error);
+            }
+        }
+    }
+    (rounded > 0).then(|| {
+        format!(
+            "{}: glTF holds frames as offsets from the rest pose, and {rounded} point(s) far from \
+             it come back rounded by up to {worst:.3e} m (write .usdc or .abc to keep them)",
+            path.display()
+        )
+    })
+}
+
 /// One line per kind of change writing `groom` (in `units`) to `path` must
 /// make to the data: units the file cannot keep, attributes the format
 /// cannot hold, curve types or a wrap it cannot write. Empty when the file
@@ -355,6 +395,9 @@ pub fn warnings(path: &Path, groom: &Groom, units: Units) -> Vec<String> {
     if let Some(frame) = groom.frames.first() {
         let names: Vec<&str> = frame.attributes.iter().map(|a| a.name.as_str()).collect();
         warnings.extend(frame_attributes_warning(path, &names));
+    }
+    if matches!(extension.as_str(), "gltf" | "glb") {
+        warnings.extend(morph_target_rounding_warning(path, groom));
     }
     let dropped: Vec<&str> = groom
         .attributes

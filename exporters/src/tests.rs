@@ -569,3 +569,38 @@ fn an_attribute_name_usd_cannot_hold_is_warned() {
         "{warnings:?}"
     );
 }
+
+/// A point whose rest sits at 3.7e17 m (a fuzzed Alembic file) and that
+/// moves to 6 cm comes back from glTF's morph targets as 0: the conversion
+/// says so (found by the round-trip fuzz, seed 41, Alembic mutant 126),
+/// and hair-scale motion gives no warning.
+#[test]
+fn gltf_warns_when_morph_targets_round_far_points() {
+    let mut groom = Groom::from_strands([vec![[0.0, 0.02, 0.0], [3.7e17, 0.04, 6.4e17]]]);
+    groom.frames = vec![
+        Frame {
+            time: 0.0,
+            points: groom.points.clone(),
+            attributes: Vec::new(),
+        },
+        Frame {
+            time: 1.0 / 30.0,
+            points: vec![[0.0, 0.02, 0.0], [0.0646, 0.04, 0.0446]],
+            attributes: Vec::new(),
+        },
+    ];
+    let warnings = crate::warnings(Path::new("far.glb"), &groom, Units::METERS);
+    assert!(
+        warnings.iter().any(|w| w.starts_with(
+            "far.glb: glTF holds frames as offsets from the rest pose, and 1 point(s)"
+        )),
+        "{warnings:?}"
+    );
+    // The same motion near the rest pose: nothing lost, no warning; nor in
+    // a format that writes each frame whole.
+    groom.points[1] = [0.06, 0.04, 0.04];
+    groom.frames[0].points[1] = [0.06, 0.04, 0.04];
+    assert!(crate::warnings(Path::new("near.glb"), &groom, Units::METERS).is_empty());
+    groom.points[1] = [3.7e17, 0.04, 6.4e17];
+    assert!(crate::warnings(Path::new("far.abc"), &groom, Units::METERS).is_empty());
+}
