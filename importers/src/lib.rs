@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod hair;
 mod mapped;
 pub mod mesh;
+mod mesh_types;
 pub mod obj;
 mod obj_syntax;
 pub mod stream;

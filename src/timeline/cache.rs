@@ -15,7 +15,7 @@
 //! `.abc`, `.usdc` or `.usd`, and the strands as simulated (no `resample`
 //! or `curves`, which would re-shape the guides and break the weights).
 
-use super::bake::BakeError;
+use super::error::BakeError;
 use super::schema::{ExportSpec, ExportWhat};
 use super::{Timeline, TimelineError};
 

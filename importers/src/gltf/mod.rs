@@ -32,7 +32,7 @@ mod scene;
 mod tests;
 mod triangles;
 
-use crate::mesh::{Mesh, Triangles};
+use crate::mesh_types::{Mesh, Triangles};
 use crate::ImportError;
 use animation::Piece;
 use document::Document;
