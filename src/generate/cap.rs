@@ -6,7 +6,7 @@
 
 use super::{GeneratorParameters, RootLayout, SplitMix64, StrandShape};
 use groom::math::double::{add, cross, scale, try_normalize, V3};
-use groom::{Attribute, AttributeValues, Groom, Provenance, Units, UpAxis};
+use groom::{Attribute, AttributeValues, Groom};
 
 /// Unit `a`; straight up for a vector without direction (the generator's
 /// directions are bounded, so this only guards a degenerate input).
@@ -24,15 +24,7 @@ pub(super) fn generate_cap(parameters: &GeneratorParameters) -> Groom {
     let step = p.length as f64 / edges as f64;
     let center = p.head_center.map(f64::from);
     let radii = p.head_radii.map(f64::from);
-    let mut groom = Groom {
-        units: Units::METERS,
-        up_axis: UpAxis::Y,
-        provenance: Provenance {
-            format: "generated".into(),
-            ..Default::default()
-        },
-        ..Groom::default()
-    };
+    let mut groom = super::empty_groom();
     groom.points.reserve(p.strands * (edges + 1));
     let mut root_uv = Vec::with_capacity(p.strands);
     let cap = (p.scalp_angle as f64).to_radians();

@@ -10,7 +10,7 @@ use super::scalp::{angles, Root, Scalp};
 use super::variation::{self, ClumpIndex, Draw, STREAM_CLUMP, STREAM_STRAND};
 use super::{GeneratorError, GeneratorParameters, SplitMix64, CLEARANCE};
 use groom::math::double::{dot, V3};
-use groom::{Attribute, AttributeValues, Groom, Provenance, Units, UpAxis};
+use groom::{Attribute, AttributeValues, Groom};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -91,15 +91,7 @@ pub(super) fn generate_head(p: &GeneratorParameters) -> Result<Groom, GeneratorE
             )
         })
         .collect();
-    let mut groom = Groom {
-        units: Units::METERS,
-        up_axis: UpAxis::Y,
-        provenance: Provenance {
-            format: "generated".into(),
-            ..Default::default()
-        },
-        ..Groom::default()
-    };
+    let mut groom = super::empty_groom();
     let total: usize = strands.iter().map(|(s, _)| s.len()).sum();
     groom.points.reserve(total);
     let mut widths = Vec::with_capacity(total);

@@ -22,7 +22,7 @@ mod head;
 mod scalp;
 mod variation;
 
-use groom::Groom;
+use groom::{Groom, Provenance, Units, UpAxis};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -429,6 +429,19 @@ impl GeneratorParameters {
             );
         }
         Ok(())
+    }
+}
+
+/// The groom every layout fills: metres, Y up, marked as generated.
+fn empty_groom() -> Groom {
+    Groom {
+        units: Units::METERS,
+        up_axis: UpAxis::Y,
+        provenance: Provenance {
+            format: "generated".into(),
+            ..Default::default()
+        },
+        ..Groom::default()
     }
 }
 
