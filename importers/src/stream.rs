@@ -4,13 +4,17 @@
 //! every frame in turn (`inspect`) or at a few (`preview`) holds one frame
 //! plus the topology, however large the file.
 //!
-//! Alembic is read this way from a memory map whose pages are released
-//! after each frame (`crate::mapped`). The other formats are read whole
-//! and their frames handed out one by one (USD's layer model and glTF's
-//! accessors decode every sample on reading; streaming them is to do).
+//! Alembic and USD crate files (`.usdc`, and `.usd` holding a crate) are
+//! read this way from a memory map whose pages are released after each
+//! frame (`crate::mapped`); a crate layer that composes other layers, or
+//! whose topology changes over time, is read whole (`crate::usd::stream`).
+//! The other formats are read whole and their frames handed out one by one
+//! (`.usda` is text parsed whole; glTF's accessors decode every sample on
+//! reading; streaming glTF is to do).
 
 use crate::abc::{archive::Archive, ogawa::Fault, scene};
 use crate::mapped::Mapped;
+use crate::usd::stream::{Opened, UsdStream};
 use crate::{extension_of, ImportError};
 use groom::{Frame, Groom};
 use std::path::{Path, PathBuf};
@@ -27,6 +31,8 @@ pub struct FrameStream {
 enum Source {
     /// An Alembic file, each frame read from the map when asked for.
     Abc(Mapped),
+    /// A USD crate file, each frame decoded from the map when asked for.
+    Usd(Mapped, Box<UsdStream>),
     /// A file read whole: its frames, handed out by copy.
     Whole(Vec<Frame>),
 }
@@ -35,6 +41,9 @@ impl FrameStream {
     /// Opens `path` (format by extension, as [`crate::read`]) and reads
     /// its topology and frame times.
     pub fn open(path: &Path) -> Result<FrameStream, ImportError> {
+        if let Some(stream) = FrameStream::open_usd_crate(path)? {
+            return Ok(stream);
+        }
         if extension_of(path) != "abc" {
             let mut groom = crate::read(path)?;
             let frames = std::mem::take(&mut groom.frames);
@@ -59,6 +68,39 @@ impl FrameStream {
             times,
             source: Source::Abc(mapped),
         })
+    }
+
+    /// A USD file (`.usdc`, `.usd`) opened to stream from its crate
+    /// layer; `None` when it is text, or composes other layers, or its
+    /// topology changes over time (`crate::usd::stream`): then it is read
+    /// whole, by [`FrameStream::open`] or, to follow the changing topology,
+    /// by [`crate::read_sequence`].
+    pub fn open_usd_crate(path: &Path) -> Result<Option<FrameStream>, ImportError> {
+        if !matches!(extension_of(path).as_str(), "usdc" | "usd") {
+            return Ok(None);
+        }
+        let mut mapped = Mapped::open(path)?;
+        let opened = UsdStream::open(path, mapped.bytes())?;
+        mapped.release();
+        let Some(Opened {
+            stream,
+            mut groom,
+            times,
+        }) = opened
+        else {
+            return Ok(None);
+        };
+        // As `crate::read` finishes a USD groom.
+        groom.provenance.source = Some(path.to_path_buf());
+        if groom.provenance.units_source.is_empty() {
+            groom.provenance.units_source = "file".into();
+        }
+        Ok(Some(FrameStream {
+            path: path.to_path_buf(),
+            groom,
+            times,
+            source: Source::Usd(mapped, Box::new(stream)),
+        }))
     }
 
     /// The topology, rest points and attributes (no frames).
@@ -87,6 +129,11 @@ impl FrameStream {
         };
         match &mut self.source {
             Source::Whole(frames) => frames.get(index).cloned().ok_or_else(missing),
+            Source::Usd(mapped, stream) => {
+                let frame = stream.frame(&self.path, mapped.bytes(), index);
+                mapped.release();
+                frame
+            }
             Source::Abc(mapped) => {
                 let sample = u32::try_from(index).map_err(|_| missing())?;
                 let (mut groom, _) = abc_sample(&self.path, mapped, sample)?;
@@ -132,5 +179,129 @@ mod tests {
         assert_eq!(&stream.frame(1).unwrap(), &whole.frames[1]);
         let error = stream.frame(3).unwrap_err().to_string();
         assert!(error.contains("no frame 3: the file has 3"), "{error}");
+    }
+
+    /// An animated groom of two strands with a width held still and a
+    /// wetness that changes every frame (written per frame), and a bond
+    /// rate that changes on some frames only.
+    fn animated_groom(frames: usize) -> Groom {
+        use groom::{Attribute, AttributeValues};
+        let mut groom = Groom::from_strands([
+            vec![[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.5]],
+            vec![[1.0, 0.0, 0.0], [1.0, 1.5, 0.25]],
+        ]);
+        groom.set_attribute(Attribute::new(
+            "width",
+            AttributeValues::Float(vec![0.1, 0.08, 0.05, 0.1, 0.05]),
+        ));
+        groom.set_attribute(Attribute::new(
+            "wetness",
+            AttributeValues::Float(vec![1.0; 5]),
+        ));
+        groom.set_attribute(Attribute::per_strand(
+            "bond_hydrogen",
+            AttributeValues::Float(vec![1.0, 1.0]),
+        ));
+        groom.frames = (0..frames)
+            .map(|i| Frame {
+                time: i as f64 / 24.0,
+                points: groom
+                    .points
+                    .iter()
+                    .map(|p| [p[0] + 0.1 * i as f32, p[1], p[2] - 0.01 * (i * i) as f32])
+                    .collect(),
+                attributes: vec![
+                    Attribute::new(
+                        "wetness",
+                        AttributeValues::Float(vec![1.0 - 0.1 * i as f32; 5]),
+                    ),
+                    Attribute::per_strand(
+                        "bond_hydrogen",
+                        AttributeValues::Float(vec![1.0 - 0.05 * (i / 2) as f32, 0.5]),
+                    ),
+                ],
+            })
+            .collect();
+        groom
+    }
+
+    /// A USD crate file streams: each frame read alone equals the whole
+    /// read's, points and per-frame primvars, in any order; the topology
+    /// and rest equal the whole read's without frames.
+    #[test]
+    fn usd_crate_frames_read_one_at_a_time_equal_the_whole_read() {
+        let dir = std::env::temp_dir().join(format!("groombake-usd-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in ["anim.usdc", "anim.usd"] {
+            let path = dir.join(name);
+            exporters::write(&path, &animated_groom(7)).unwrap();
+            let whole = crate::read(&path).unwrap();
+            assert_eq!(whole.frames.len(), 7);
+            assert!(whole.frames[3].attribute("wetness").is_some(), "{name}");
+            let mut stream = FrameStream::open(&path).unwrap();
+            assert!(
+                matches!(stream.source, Source::Usd(..)),
+                "{name} was read whole"
+            );
+            let mut rest = whole.clone();
+            rest.frames.clear();
+            assert_eq!(stream.groom(), &rest, "{name}");
+            assert_eq!(
+                stream.times(),
+                whole.frames.iter().map(|f| f.time).collect::<Vec<_>>()
+            );
+            for index in [6, 0, 3, 1, 2, 5, 4] {
+                assert_eq!(
+                    &stream.frame(index).unwrap(),
+                    &whole.frames[index],
+                    "{name} frame {index}"
+                );
+            }
+            let error = stream.frame(7).unwrap_err().to_string();
+            assert!(error.contains("no frame 7: the file has 7"), "{error}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Text USD and a crate file without frames are read whole, as before.
+    #[test]
+    fn usda_and_still_crate_files_read_whole() {
+        let dir = std::env::temp_dir().join(format!("groombake-usd-whole-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("anim.usda");
+        exporters::write(&path, &animated_groom(3)).unwrap();
+        let stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Whole(_)));
+        assert_eq!(stream.frame_count(), 3);
+        let path = dir.join("still.usdc");
+        exporters::write(&path, &animated_groom(0)).unwrap();
+        let mut stream = FrameStream::open(&path).unwrap();
+        assert_eq!(stream.frame_count(), 0);
+        assert_eq!(stream.groom(), &crate::read(&path).unwrap());
+        assert!(stream.frame(0).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A file usd-core wrote with the samples a stream must pick as the
+    /// whole read does (tests/data/make_streaming_edges.py): out-of-order
+    /// and defaulted points, a primvar held between its codes, a blocked
+    /// sample, two prims.
+    #[test]
+    fn usd_core_samples_stream_as_they_read_whole() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/streaming_edges.usdc");
+        let whole = crate::read(&path).unwrap();
+        assert_eq!(whole.frames.len(), 4);
+        assert!(whole
+            .frames
+            .iter()
+            .all(|f| f.attribute("wetness").is_some()));
+        let mut stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Usd(..)));
+        let mut rest = whole.clone();
+        rest.frames.clear();
+        assert_eq!(stream.groom(), &rest);
+        for (index, frame) in whole.frames.iter().enumerate().rev() {
+            assert_eq!(&stream.frame(index).unwrap(), frame, "frame {index}");
+        }
     }
 }

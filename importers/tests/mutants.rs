@@ -190,10 +190,16 @@ fn formats(dir: &Path) -> Vec<Format> {
                 exported(dir, "usdc"),
                 repo_file("importers/tests/data/reference.usdc"),
                 repo_file("importers/tests/data/blender501_hair_by_usd_core.usdc"),
+                repo_file("importers/tests/data/streaming_edges.usdc"),
             ],
-            vec![("usd::read_bytes", |p, b| {
-                ok(importers::usd::read_bytes(p, b))
-            })],
+            vec![
+                ("usd::read_bytes", |p, b| {
+                    ok(importers::usd::read_bytes(p, b))
+                }),
+                ("usd::read_streamed_bytes", |p, b| {
+                    ok(importers::usd::read_streamed_bytes(p, b))
+                }),
+            ],
         ),
         format(
             "Alembic (.abc)",

@@ -253,13 +253,18 @@ fn inspect_mesh(args: &InspectArgs, mesh: &importers::mesh::Mesh) -> anyhow::Res
 }
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    // USD may change topology over time: read whole, as a sequence. The
-    // other formats are read a frame at a time.
+    // USD may change topology over time: a crate file of one topology
+    // streams, any other USD is read whole, as a sequence. The other
+    // formats are read a frame at a time.
     let read = if matches!(
         importers::extension_of(&args.file).as_str(),
         "usda" | "usdc" | "usd"
     ) {
-        super::read_sequence(&args.file).map(Facts::of_sequence)
+        match importers::stream::FrameStream::open_usd_crate(&args.file) {
+            Ok(Some(stream)) => Facts::of_stream(&args.file, stream),
+            Ok(None) => super::read_sequence(&args.file).map(Facts::of_sequence),
+            Err(error) => Err(error.into()),
+        }
     } else {
         importers::stream::FrameStream::open(&args.file)
             .map_err(anyhow::Error::from)

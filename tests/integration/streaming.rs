@@ -3,7 +3,7 @@
 //! Measured as the child's peak resident memory (`wait4`'s `ru_maxrss`) on
 //! two caches of the same groom, one with four times the frames of the
 //! other: the peak may not grow by more than a small part of the
-//! difference in file size.
+//! difference in file size. Alembic and USD crate files both stream.
 
 use crate::util::TestDir;
 use groom::{Frame, Groom};
@@ -73,15 +73,25 @@ fn peak_rss(dir: &TestDir, args: &[&str]) -> u64 {
 
 #[test]
 fn inspect_and_preview_memory_does_not_grow_with_the_frames() {
+    memory_does_not_grow_with_the_frames("abc");
+}
+
+#[test]
+fn usd_crate_inspect_and_preview_memory_does_not_grow_with_the_frames() {
+    memory_does_not_grow_with_the_frames("usdc");
+}
+
+fn memory_does_not_grow_with_the_frames(extension: &str) {
     let dir = TestDir::new();
-    write_cache(&dir.path("few.abc"), FEW_FRAMES);
-    write_cache(&dir.path("many.abc"), 4 * FEW_FRAMES);
+    let (few_name, many_name) = (format!("few.{extension}"), format!("many.{extension}"));
+    write_cache(&dir.path(&few_name), FEW_FRAMES);
+    write_cache(&dir.path(&many_name), 4 * FEW_FRAMES);
     let size = |name: &str| std::fs::metadata(dir.path(name)).unwrap().len();
-    let added = size("many.abc") - size("few.abc");
+    let added = size(&many_name) - size(&few_name);
     assert!(added > 30 << 20, "{added} bytes");
 
     // The summary still covers every frame: the last one is the highest.
-    let summary = dir.inspect("many.abc");
+    let summary = dir.inspect(&many_name);
     assert_eq!(summary["frames"], 4 * FEW_FRAMES);
     assert_eq!(
         summary["frame_times"].as_array().unwrap().len(),
@@ -105,15 +115,15 @@ fn inspect_and_preview_memory_does_not_grow_with_the_frames() {
                 .collect();
             peak_rss(&dir, &args)
         };
-        let (few, many) = (run("few.abc"), run("many.abc"));
+        let (few, many) = (run(&few_name), run(&many_name));
         let grown = many.saturating_sub(few);
-        println!("{args:?}: peak {few} / {many} bytes, file +{added} bytes");
+        println!("{extension} {args:?}: peak {few} / {many} bytes, file +{added} bytes");
         // Reading the file whole grows by at least its size (the bytes)
         // and again by the frames decoded; one frame at a time, by about
         // nothing. A tenth of the added size leaves room for noise.
         assert!(
             grown < added / 10,
-            "{args:?}: peak memory {few} bytes with {FEW_FRAMES} frames, {many} with {}: \
+            "{extension} {args:?}: peak memory {few} bytes with {FEW_FRAMES} frames, {many} with {}: \
              grew by {grown} bytes for {added} more bytes of file",
             4 * FEW_FRAMES
         );

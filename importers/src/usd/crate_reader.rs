@@ -75,24 +75,33 @@ type Result<T> = std::result::Result<T, ImportError>;
 type Fields = Vec<(String, u64)>;
 
 pub(super) fn read(path: &Path, bytes: &[u8]) -> Result<Stage> {
-    let mut reader = CrateReader {
-        file: path,
-        bytes,
-        version: (0, 0, 0),
-        tokens: Vec::new(),
-        strings: Vec::new(),
-        fields: Vec::new(),
-        fieldsets: Vec::new(),
-        paths: Vec::new(),
-        specs: Vec::new(),
-        decode_budget: Cell::new(
-            (bytes.len() as u64)
-                .saturating_mul(DECODE_FACTOR)
-                .saturating_add(DECODE_ALLOWANCE),
-        ),
-    };
+    let mut reader = CrateReader::new(path, bytes, false);
     reader.structure()?;
     reader.stage()
+}
+
+/// [`read`], but the array values of time samples that
+/// [`super::stream::deferrable`] names are left undecoded, as
+/// [`Value::Deferred`] with their value rep: a frame-at-a-time reader
+/// decodes them with [`decode`] when it reaches their frame.
+pub(super) fn read_deferred(path: &Path, bytes: &[u8]) -> Result<Stage> {
+    let mut reader = CrateReader::new(path, bytes, true);
+    reader.structure()?;
+    reader.stage()
+}
+
+/// Decodes value reps of the crate file `bytes` (ones that
+/// [`read_deferred`] left as [`Value::Deferred`]), each with what names it
+/// in errors; nothing is read when there are none.
+pub(super) fn decode(path: &Path, bytes: &[u8], reps: &[(u64, String)]) -> Result<Vec<Value>> {
+    if reps.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut reader = CrateReader::new(path, bytes, false);
+    reader.structure()?;
+    reps.iter()
+        .map(|(rep, what)| reader.value(*rep, what, 1))
+        .collect()
 }
 
 /// How the numbers of an element are stored.
@@ -269,9 +278,31 @@ struct CrateReader<'a> {
     specs: Vec<(u32, u32, u32)>,
     /// Bytes that decoding may still allocate ([`DECODE_FACTOR`]).
     decode_budget: Cell<u64>,
+    /// Leave deferrable time samples' arrays undecoded ([`read_deferred`]).
+    defer_samples: bool,
 }
 
 impl<'a> CrateReader<'a> {
+    fn new(file: &'a Path, bytes: &'a [u8], defer_samples: bool) -> CrateReader<'a> {
+        CrateReader {
+            file,
+            bytes,
+            version: (0, 0, 0),
+            tokens: Vec::new(),
+            strings: Vec::new(),
+            fields: Vec::new(),
+            fieldsets: Vec::new(),
+            paths: Vec::new(),
+            specs: Vec::new(),
+            decode_budget: Cell::new(
+                (bytes.len() as u64)
+                    .saturating_mul(DECODE_FACTOR)
+                    .saturating_add(DECODE_ALLOWANCE),
+            ),
+            defer_samples,
+        }
+    }
+
     fn error(&self, offset: u64, message: impl Into<String>) -> ImportError {
         ImportError::malformed(self.file, Place::Offset(offset), message)
     }
@@ -1027,7 +1058,7 @@ impl<'a> CrateReader<'a> {
     }
 
     /// `(time codes, value reps)` of a TimeSamples rep.
-    fn time_samples(&self, rep: u64, what: &str) -> Result<Vec<(f64, Value)>> {
+    fn time_samples(&self, rep: u64, what: &str, defer: bool) -> Result<Vec<(f64, Value)>> {
         let at = rep & PAYLOAD_MASK;
         let jump = |offset: u64| -> Result<u64> {
             let relative = self.u64_at(offset, what)? as i64;
@@ -1069,7 +1100,13 @@ impl<'a> CrateReader<'a> {
         for (time, chunk) in times.into_iter().zip(raw.chunks_exact(8)) {
             let mut bytes = [0u8; 8];
             bytes.copy_from_slice(chunk);
-            samples.push((time, self.value(u64::from_le_bytes(bytes), what, 1)?));
+            let rep = u64::from_le_bytes(bytes);
+            let value = if defer && rep & ARRAY_BIT != 0 && rep & INLINED_BIT == 0 {
+                Value::Deferred(rep)
+            } else {
+                self.value(rep, what, 1)?
+            };
+            samples.push((time, value));
         }
         Ok(samples)
     }
@@ -1331,7 +1368,11 @@ impl<'a> CrateReader<'a> {
                         }
                     }
                     "default" => attribute.default = Some(self.value(rep, &entry.text, 0)?),
-                    "timeSamples" => attribute.samples = self.time_samples(rep, &entry.text)?,
+                    "timeSamples" => {
+                        let defer =
+                            self.defer_samples && super::stream::deferrable(&attribute.name);
+                        attribute.samples = self.time_samples(rep, &entry.text, defer)?
+                    }
                     "elementSize" => {
                         attribute.element_size = self
                             .value(rep, &entry.text, 0)?

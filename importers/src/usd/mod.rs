@@ -11,6 +11,7 @@ mod compose;
 mod crate_reader;
 mod frame_primvars;
 mod primvars;
+pub(crate) mod stream;
 mod usda;
 
 use crate::transform::{invert, multiply, scaling, transform_point, translation, Matrix, IDENTITY};
@@ -33,6 +34,21 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     frame_primvars::add_frame_attributes(path, &stage, &mut groom)?;
     groom.provenance.format = "usd".into();
     Ok(groom)
+}
+
+/// Reads a crate file from bytes in memory the way [`crate::stream`] reads
+/// one from disk: its topology, then each frame alone, in turn. `None`
+/// when such a file is read whole (see [`stream`]). For tests and fuzzing
+/// of the frame-at-a-time path; `path` names the bytes in errors.
+pub fn read_streamed_bytes(path: &Path, bytes: &[u8]) -> Result<Option<Groom>, ImportError> {
+    let Some(opened) = stream::UsdStream::open(path, bytes)? else {
+        return Ok(None);
+    };
+    let mut groom = opened.groom;
+    for index in 0..opened.times.len() {
+        groom.frames.push(opened.stream.frame(path, bytes, index)?);
+    }
+    Ok(Some(groom))
 }
 
 /// Reads a USD file as one groom per stretch of time with one topology
@@ -260,6 +276,9 @@ pub(crate) enum Value {
     /// The targets of a composition arc list (`references`, `payload`,
     /// `inherits`, `specializes`, `subLayers`): `@asset@</path>` items.
     Arcs(Vec<ArcTarget>),
+    /// A time sample's array left undecoded: its value rep in the crate
+    /// file (only in a stage read for streaming, [`stream`]).
+    Deferred(u64),
 }
 
 /// One item of a composition arc list: an asset (another layer; `None` for
