@@ -3,6 +3,7 @@
 //! and state exports, and reports.
 
 pub use super::error::BakeError;
+use super::frame_pipe::{ExportSink, FramePipe, Job, Sinks};
 use super::motion::pose_at;
 use super::outputs::{self, Staging};
 use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport, WatchdogReport};
@@ -13,7 +14,7 @@ use super::{Timeline, TimelineError};
 use crate::sim::{
     self, attribute_names, Collider, ColliderSet, Material, Solver, SolverParameters, StrandSet,
 };
-use groom::{Frame, Groom, Units, UpAxis};
+use groom::{Groom, Units, UpAxis};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -446,18 +447,14 @@ pub fn plan_outputs(timeline: &Timeline, options: &BakeOptions) -> Result<Vec<Pa
     Ok(planned.into_iter().map(|(p, _)| p).collect())
 }
 
-/// An animated export under way.
+/// An animated export under way: which frames are due (the writing is
+/// [`super::frame_pipe`]'s).
 struct AnimatedExport {
     index: usize,
-    delivery: super::render::Delivery,
-    writer: Box<dyn exporters::FrameWriter>,
     fps: f64,
+    /// Frames handed to the pipe so far.
     frames_written: usize,
     frame_count: usize,
-    units: Units,
-    up: UpAxis,
-    /// A guide cache: frames give the guides' points only.
-    guides_only: bool,
 }
 
 /// What export `index` is written as: its `units`/`up`, else its `target`'s
@@ -687,11 +684,13 @@ pub fn bake(timeline: &Timeline, options: &BakeOptions) -> Result<BakeOutcome, B
     if let Some(threads) = options.threads {
         builder = builder.num_threads(threads);
     }
-    let pool = builder
-        .build()
-        .map_err(|e| BakeError::Threads(e.to_string()))?;
+    let pool = Arc::new(
+        builder
+            .build()
+            .map_err(|e| BakeError::Threads(e.to_string()))?,
+    );
     let result = pool.install(|| {
-        let mut run = BakeRun::prepare(timeline, options, pool.current_num_threads())?;
+        let mut run = BakeRun::prepare(timeline, options, Arc::clone(&pool))?;
         run.run_stages()?;
         run.write()
     });
@@ -712,7 +711,7 @@ struct BakeRun<'a> {
     started: Instant,
     groom: Groom,
     /// Render strands that follow the simulated guides, if any.
-    render: Option<groom::interpolate::RenderHair>,
+    render: Option<Arc<groom::interpolate::RenderHair>>,
     strands: StrandSet,
     colliders: ColliderSet,
     parameters: SolverParameters,
@@ -727,8 +726,12 @@ struct BakeRun<'a> {
     /// staged until the end.
     finals: Vec<PathBuf>,
     staged: Vec<PathBuf>,
+    /// Where animated frames are written; declared before `staging` so
+    /// that a stopped bake's writer is joined before its staged files go.
+    pipe: Option<FramePipe>,
     staging: Staging,
     animated: Vec<AnimatedExport>,
+    pool: Arc<rayon::ThreadPool>,
     /// The attributes the stages change, written with every animated frame.
     frame_attributes: Vec<&'static str>,
     /// Steps done over all stages.
@@ -762,8 +765,9 @@ impl<'a> BakeRun<'a> {
     fn prepare(
         timeline: &'a Timeline,
         options: &'a BakeOptions,
-        threads: usize,
+        pool: Arc<rayon::ThreadPool>,
     ) -> Result<BakeRun<'a>, BakeError> {
+        let threads = pool.current_num_threads();
         let started = Instant::now();
         let finals = plan_outputs(timeline, options)?;
         let Prepared {
@@ -863,7 +867,7 @@ impl<'a> BakeRun<'a> {
             options,
             started,
             groom,
-            render,
+            render: render.map(Arc::new),
             strands,
             colliders,
             parameters,
@@ -875,8 +879,10 @@ impl<'a> BakeRun<'a> {
             exports,
             finals,
             staged,
+            pipe: None,
             staging,
             animated: Vec::new(),
+            pool,
             frame_attributes,
             step_index: 0,
             snapshots: Vec::new(),
@@ -898,6 +904,7 @@ impl<'a> BakeRun<'a> {
 
     /// Opens every animated export with the groom as it starts.
     fn open_animated(&mut self) -> Result<(), BakeError> {
+        let mut sinks = Vec::new();
         for (index, e) in self.exports.iter().enumerate() {
             if e.what != ExportWhat::Animated {
                 continue;
@@ -908,11 +915,11 @@ impl<'a> BakeRun<'a> {
             let (units, up) = (destination.units, destination.up);
             let guides = self.groom_now(false);
             let delivery = super::render::Delivery::new(
-                self.render.as_ref(),
+                self.render.as_deref(),
                 &guides,
                 super::render::curve_form(e),
             );
-            let mut base = delivery.groom(self.render.as_ref(), &guides);
+            let mut base = delivery.groom(self.render.as_deref(), &guides);
             base.convert_to(units, up);
             let guides_only = super::cache::cache_of(e) == super::cache::CacheMode::Guides;
             let open = if guides_only {
@@ -928,65 +935,57 @@ impl<'a> BakeRun<'a> {
             )?;
             self.animated.push(AnimatedExport {
                 index,
-                delivery,
-                writer,
                 fps,
                 frames_written: 0,
                 frame_count,
+            });
+            sinks.push(ExportSink {
+                delivery,
+                writer,
                 units,
                 up,
                 guides_only,
             });
         }
+        self.pipe = Some(FramePipe::new(Sinks {
+            sinks,
+            render: self.render.clone(),
+            frame_attributes: self.frame_attributes.clone(),
+            pool: Arc::clone(&self.pool),
+        })?);
         Ok(())
     }
 
     /// Writes the animated frames due by the current step: frame k belongs
     /// to the step nearest k / fps.
     fn write_due_frames(&mut self) -> Result<(), BakeError> {
-        let due = |a: &AnimatedExport| {
-            a.frames_written < a.frame_count
-                && ((a.frames_written as f64 / a.fps) / self.dt).round() as u64 <= self.step_index
-        };
-        // The guides' pose with the attributes that change, once for all
-        // exports with a frame due.
-        let guides = (!self.frame_attributes.is_empty() && self.animated.iter().any(due))
-            .then(|| self.groom_now(false));
-        for a in self.animated.iter_mut() {
+        let mut frames = Vec::new();
+        for (sink, a) in self.animated.iter_mut().enumerate() {
             while a.frames_written < a.frame_count {
                 let k = a.frames_written;
                 let due = ((k as f64 / a.fps) / self.dt).round() as u64;
                 if due > self.step_index {
                     break;
                 }
-                let mut points = if a.guides_only {
-                    self.strands.positions().to_vec()
-                } else {
-                    a.delivery
-                        .points(self.render.as_ref(), self.strands.positions())
-                };
-                groom::convert_points(&mut points, (Units::METERS, UpAxis::Y), (a.units, a.up));
-                let attributes = guides.as_ref().map_or_else(Vec::new, |g| {
-                    if a.guides_only {
-                        return super::frame_attributes::of_guides(g, &self.frame_attributes);
-                    }
-                    super::frame_attributes::delivered(
-                        &a.delivery,
-                        self.render.as_ref(),
-                        g,
-                        &self.frame_attributes,
-                    )
-                });
-                let frame = Frame {
-                    time: k as f64 / a.fps,
-                    points,
-                    attributes,
-                };
-                a.writer.write_frame(&frame)?;
+                frames.push((sink, k as f64 / a.fps));
                 a.frames_written += 1;
             }
         }
-        Ok(())
+        if frames.is_empty() {
+            return Ok(());
+        }
+        // The guides' pose with the attributes that change, once for all
+        // exports with a frame due.
+        let guides = (!self.frame_attributes.is_empty()).then(|| self.groom_now(false));
+        let job = Job {
+            positions: self.strands.positions().to_vec(),
+            guides,
+            frames,
+        };
+        match &mut self.pipe {
+            Some(pipe) => pipe.send(job),
+            None => Ok(()),
+        }
     }
 
     /// The groom as it is now (see [`groom_now`]).
@@ -1004,7 +1003,7 @@ impl<'a> BakeRun<'a> {
     fn snapshot(&mut self, label: String) {
         let guides = self.groom_now(false);
         let groom = super::render::deliver(
-            self.render.as_ref(),
+            self.render.as_deref(),
             &guides,
             sheet_curve_form(self.timeline),
         );
@@ -1305,9 +1304,13 @@ impl<'a> BakeRun<'a> {
     /// the sheet, and completes the report.
     fn write(mut self) -> Result<BakeOutcome, BakeError> {
         let mut frames_of = vec![None; self.exports.len()];
-        for a in std::mem::take(&mut self.animated) {
+        for a in &self.animated {
             frames_of[a.index] = Some(a.frames_written);
-            a.writer.finish()?;
+        }
+        if let Some(pipe) = self.pipe.take() {
+            for sink in pipe.finish()? {
+                sink.writer.finish()?;
+            }
         }
         for (index, e) in self.exports.iter().enumerate() {
             self.options.interrupted()?;
@@ -1324,7 +1327,7 @@ impl<'a> BakeRun<'a> {
                     ExportWhat::Animated => continue,
                 };
                 out = super::render::deliver(
-                    self.render.as_ref(),
+                    self.render.as_deref(),
                     &out,
                     super::render::curve_form(e),
                 );

@@ -9,6 +9,7 @@ pub mod drying;
 mod error;
 pub mod fibre;
 pub mod frame_attributes;
+mod frame_pipe;
 pub mod hold;
 pub mod motion;
 pub mod outputs;
