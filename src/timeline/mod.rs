@@ -14,6 +14,7 @@ pub mod hold;
 pub mod motion;
 pub mod outputs;
 pub mod plots;
+mod prepare;
 mod ranges;
 pub mod render;
 pub mod report;
