@@ -20,8 +20,9 @@
 //! - after each Newton iteration, [`project`] pushes the contact point
 //!   (`(1 - s) p_e + s p_{e+1}`) back to two radii from the target along
 //!   the contact normal (an inequality: never pulled in), spreading the
-//!   push over the edge's two vertices, and marks them as touching for the
-//!   next solve (`contact_normals`, as a collider contact does);
+//!   push over the edge's two vertices (near a pinned root only as far as
+//!   a bounded lever gets it, see [`spread`]), and marks them as touching
+//!   for the next solve (`contact_normals`, as a collider contact does);
 //! - after the last iteration, [`friction`] applies Coulomb's law at each
 //!   touching vertex (the vertices nearest each contact point) to its
 //!   motion over the step relative to the other fibre's: its tangential
@@ -552,12 +553,24 @@ impl HairContacts {
 /// The weights of an edge's two vertices at `s` for a push of the contact
 /// point (only free vertices move), and the push's divisor (the contact
 /// point moves by `(w_a (1 - s) + w_b s)` times the vertices' move).
+///
+/// The divisor is at least [`MIN_DIVISOR`], its value for two free
+/// vertices at the middle of the edge: a contact near a pinned vertex (a
+/// root, in a dense groom where every root edge lies among others) moves
+/// the free vertex at most 1.5 times the overlap (`2 s` times it for
+/// `s <= 1/2`), instead of swinging that vertex by `gap / s` (a 10 um
+/// overlap 2 % along the root edge threw vertex 1 half a millimetre, and
+/// a dense tuft blew up: hair_friction_tests.rs). The rest of such an
+/// overlap is where the roots are: the roots hold it, not the hair.
 #[inline]
 fn spread(s: f32, free_a: f32, free_b: f32) -> Option<(f32, f32, f32)> {
     let (wa, wb) = ((1.0 - s) * free_a.min(1.0), s * free_b.min(1.0));
     let divisor = wa * (1.0 - s) + wb * s;
-    (divisor > 1e-6).then_some((wa, wb, divisor))
+    (divisor > 1e-6).then_some((wa, wb, divisor.max(MIN_DIVISOR)))
 }
+
+/// The smallest divisor of a contact's push ([`spread`]).
+const MIN_DIVISOR: f32 = 0.5;
 
 /// Pushes each contact point of the strand (`p`, free where `free > 0`)
 /// out to `distance` from the other fibre's point where it is at the end of
