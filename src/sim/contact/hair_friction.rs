@@ -31,7 +31,8 @@
 //!   (kinetic). This is the colliders' position-level friction
 //!   (`Work::friction` in contact/solve.rs), which holds a strand on a slope within
 //!   1 % of Coulomb's rates; a contact then gets one more solve, after
-//!   which [`restick`] puts the stuck vertices back where they stuck.
+//!   which [`restick`] puts the stuck vertices back where they stuck (by
+//!   at most a quarter of a radius: further, the strand pulled them off).
 //!
 //! Each strand reads only the other strands' state at the start of the
 //! step and its own contacts in a fixed order, so the result is the same
@@ -644,6 +645,12 @@ pub(crate) struct VertexContact {
 /// vertex of a contact point always does).
 const TOUCH_SHARE: f32 = 0.25;
 
+/// The farthest [`restick`] puts a stuck vertex back, in hair radii: a
+/// resting strand creeps by micrometres a step, a strand pulled off its
+/// contact moves much further (gravity alone moves hair 76 um in a step of
+/// 1/360 s).
+pub(crate) const RESTICK_CAP: f32 = 0.25;
+
 /// Coulomb friction at each touching vertex after the solve, as the
 /// colliders' (`Work::friction` in contact/solve.rs): the vertex's motion over the
 /// step relative to the fibres it touches (at `start` when the step began,
@@ -721,15 +728,19 @@ fn gather_touch(contacts: &[HairContact], touch: &mut [VertexContact], free: &[f
 
 /// After the solve that follows [`friction`]: the vertices that stuck are
 /// put back where they stuck (relative to the fibres they touch),
-/// cancelling the little that solve slid them along the contact plane.
-/// The move is a small fraction of the hair radius, so no edge is
-/// strained by it.
+/// cancelling the little that solve slid them along the contact plane:
+/// at most `cap` (m). A vertex the solve slid further was pulled off by its
+/// own strand harder than the contact held it: it stays where the solve put
+/// it, since putting it back after the last solve, with nothing to solve
+/// after, strained its edges (tips of a swatch draped over a cylinder by
+/// 12 %).
 pub(crate) fn restick(
     touch: &[VertexContact],
     stuck: &[bool],
     p: &mut [V3],
     start: &[V3],
     dt: f32,
+    cap: f32,
 ) {
     for i in 0..p.len() {
         let t = touch[i];
@@ -740,7 +751,10 @@ pub(crate) fn restick(
         let normal = scale(t.normal, 1.0 / l);
         let other = scale(t.velocity, dt / t.weight);
         let relative = sub(sub(p[i], start[i]), other);
-        p[i] = sub(p[i], sub(relative, scale(normal, dot(relative, normal))));
+        let slide = sub(relative, scale(normal, dot(relative, normal)));
+        if length(slide) <= cap {
+            p[i] = sub(p[i], slide);
+        }
     }
 }
 

@@ -312,10 +312,12 @@ fn worst_strain(p: &[[f32; 3]], rest: &[[f32; 3]], offsets: &[usize]) -> f32 {
 /// 4 x 4 mm patch of a level scalp, leaving it at random angles (so their
 /// root edges cross within a hair's width of one another), fall under
 /// gravity for 0.3 s with hair-hair friction 0.3. No edge strains beyond
-/// the watchdog's 5 % (measured 1.9 %): the old contact push levered root
-/// edges out by `overlap / s` and the tuft blew up (edges 5e5 times their
-/// length; in a swatch of 200 strands combed over a cylinder, root edges
-/// strained 23 % in 0.2 s).
+/// 1 % (measured 0.1 %). The old contact push levered root edges out by
+/// `overlap / s` and the tuft blew up (edges 5e5 times their length; in a
+/// swatch of 200 strands combed over a cylinder, root edges strained 23 %
+/// in 0.2 s); with that fixed, putting stuck vertices back after the last
+/// solve however far it had moved them still strained edges 1.9 % (tips of
+/// the swatch 12 %).
 #[test]
 fn a_dense_tuft_with_hair_friction_keeps_its_edges() {
     let mut random = crate::generate::SplitMix64::new(3);
@@ -358,5 +360,5 @@ fn a_dense_tuft_with_hair_friction_keeps_its_edges() {
         worst = worst.max(worst_strain(set.positions(), &rest, &offsets));
     }
     eprintln!("dense tuft: worst edge strain {:.3} %", worst * 100.0);
-    assert!(worst < 0.05, "an edge strained {} %", worst * 100.0);
+    assert!(worst < 0.01, "an edge strained {} %", worst * 100.0);
 }
