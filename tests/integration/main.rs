@@ -19,6 +19,7 @@ mod golden;
 mod guard_rails;
 mod guide_cache;
 mod guides;
+mod hairstyle;
 mod hardening;
 mod hold;
 mod inspect;

@@ -20,8 +20,9 @@
 //! - after each Newton iteration, [`project`] pushes the contact point
 //!   (`(1 - s) p_e + s p_{e+1}`) back to two radii from the target along
 //!   the contact normal (an inequality: never pulled in), spreading the
-//!   push over the edge's two vertices, and marks them as touching for the
-//!   next solve (`contact_normals`, as a collider contact does);
+//!   push over the edge's two vertices (near a pinned root only as far as
+//!   a bounded lever gets it, see [`spread`]), and marks them as touching
+//!   for the next solve (`contact_normals`, as a collider contact does);
 //! - after the last iteration, [`friction`] applies Coulomb's law at each
 //!   touching vertex (the vertices nearest each contact point) to its
 //!   motion over the step relative to the other fibre's: its tangential
@@ -30,7 +31,8 @@
 //!   (kinetic). This is the colliders' position-level friction
 //!   (`Work::friction` in contact/solve.rs), which holds a strand on a slope within
 //!   1 % of Coulomb's rates; a contact then gets one more solve, after
-//!   which [`restick`] puts the stuck vertices back where they stuck.
+//!   which [`restick`] puts the stuck vertices back where they stuck (by
+//!   at most a quarter of a radius: further, the strand pulled them off).
 //!
 //! Each strand reads only the other strands' state at the start of the
 //! step and its own contacts in a fixed order, so the result is the same
@@ -552,12 +554,24 @@ impl HairContacts {
 /// The weights of an edge's two vertices at `s` for a push of the contact
 /// point (only free vertices move), and the push's divisor (the contact
 /// point moves by `(w_a (1 - s) + w_b s)` times the vertices' move).
+///
+/// The divisor is at least [`MIN_DIVISOR`], its value for two free
+/// vertices at the middle of the edge: a contact near a pinned vertex (a
+/// root, in a dense groom where every root edge lies among others) moves
+/// the free vertex at most 1.5 times the overlap (`2 s` times it for
+/// `s <= 1/2`), instead of swinging that vertex by `gap / s` (a 10 um
+/// overlap 2 % along the root edge threw vertex 1 half a millimetre, and
+/// a dense tuft blew up: hair_friction_tests.rs). The rest of such an
+/// overlap is where the roots are: the roots hold it, not the hair.
 #[inline]
 fn spread(s: f32, free_a: f32, free_b: f32) -> Option<(f32, f32, f32)> {
     let (wa, wb) = ((1.0 - s) * free_a.min(1.0), s * free_b.min(1.0));
     let divisor = wa * (1.0 - s) + wb * s;
-    (divisor > 1e-6).then_some((wa, wb, divisor))
+    (divisor > 1e-6).then_some((wa, wb, divisor.max(MIN_DIVISOR)))
 }
+
+/// The smallest divisor of a contact's push ([`spread`]).
+const MIN_DIVISOR: f32 = 0.5;
 
 /// Pushes each contact point of the strand (`p`, free where `free > 0`)
 /// out to `distance` from the other fibre's point where it is at the end of
@@ -630,6 +644,12 @@ pub(crate) struct VertexContact {
 /// The smallest share of a contact that makes a vertex touch (the nearer
 /// vertex of a contact point always does).
 const TOUCH_SHARE: f32 = 0.25;
+
+/// The farthest [`restick`] puts a stuck vertex back, in hair radii: a
+/// resting strand creeps by micrometres a step, a strand pulled off its
+/// contact moves much further (gravity alone moves hair 76 um in a step of
+/// 1/360 s).
+pub(crate) const RESTICK_CAP: f32 = 0.25;
 
 /// Coulomb friction at each touching vertex after the solve, as the
 /// colliders' (`Work::friction` in contact/solve.rs): the vertex's motion over the
@@ -708,15 +728,19 @@ fn gather_touch(contacts: &[HairContact], touch: &mut [VertexContact], free: &[f
 
 /// After the solve that follows [`friction`]: the vertices that stuck are
 /// put back where they stuck (relative to the fibres they touch),
-/// cancelling the little that solve slid them along the contact plane.
-/// The move is a small fraction of the hair radius, so no edge is
-/// strained by it.
+/// cancelling the little that solve slid them along the contact plane:
+/// at most `cap` (m). A vertex the solve slid further was pulled off by its
+/// own strand harder than the contact held it: it stays where the solve put
+/// it, since putting it back after the last solve, with nothing to solve
+/// after, strained its edges (tips of a swatch draped over a cylinder by
+/// 12 %).
 pub(crate) fn restick(
     touch: &[VertexContact],
     stuck: &[bool],
     p: &mut [V3],
     start: &[V3],
     dt: f32,
+    cap: f32,
 ) {
     for i in 0..p.len() {
         let t = touch[i];
@@ -727,7 +751,10 @@ pub(crate) fn restick(
         let normal = scale(t.normal, 1.0 / l);
         let other = scale(t.velocity, dt / t.weight);
         let relative = sub(sub(p[i], start[i]), other);
-        p[i] = sub(p[i], sub(relative, scale(normal, dot(relative, normal))));
+        let slide = sub(relative, scale(normal, dot(relative, normal)));
+        if length(slide) <= cap {
+            p[i] = sub(p[i], slide);
+        }
     }
 }
 

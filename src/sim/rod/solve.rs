@@ -231,6 +231,7 @@ pub(in crate::sim) fn end_constraints(
                 &mut work.p[..n],
                 &work.x[..n],
                 ctx.dt,
+                hair_friction::RESTICK_CAP * ctx.radius,
             );
         }
     }
