@@ -1,5 +1,5 @@
 //! `groombake preview FILE -o OUT.png [--frame F | --frames a,b,c] [--color ATTR]
-//! [--size WxH | --panel-size WxH] [--view front|side|top|persp] [--rest]`.
+//! [--size WxH | --panel-size WxH] [--view front|side|top|persp] [--rest] [--head MESH]`.
 
 use super::{values, BadInput};
 use clap::Args;
@@ -36,6 +36,11 @@ pub struct PreviewArgs {
     /// the change (a timeline, an animated file) or of the groom (a still one).
     #[arg(long, value_parser = values::suggest::<View>(values::VIEWS))]
     view: Option<View>,
+    /// A head mesh (OBJ or glTF: metres, Y up, as `generate --scalp-mesh`)
+    /// drawn opaque and skin-coloured, hiding the hair behind it. A
+    /// timeline draws its own head (its always-active colliders).
+    #[arg(long, value_hint = clap::ValueHint::FilePath, value_name = "MESH")]
+    head: Option<PathBuf>,
     /// Draw the plastic rest shape: of a `state` export, or of a timeline's
     /// result (what the hair would look like with nothing holding it).
     #[arg(long, conflicts_with_all = ["frame", "frames"])]
@@ -70,9 +75,21 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         .into());
     }
     if importers::extension_of(&args.file) == "toml" {
+        if let Some(head) = &args.head {
+            return Err(BadInput(format!(
+                "{}: --head {}: a timeline draws its own head (its colliders active in every stage, a wind stage's head or the generated scalp)",
+                args.file.display(),
+                head.display()
+            ))
+            .into());
+        }
         return preview_timeline(&args);
     }
     let (mut groom, drawn, last) = read_drawn_frames(&args)?;
+    let head = match &args.head {
+        Some(path) => vec![read_head(path, &groom)?],
+        None => Vec::new(),
+    };
     if args.rest {
         groom = rest_shape_of_state(&args.file, groom)?;
     }
@@ -95,7 +112,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
         ..PreviewOptions::default()
     };
     let image = if args.frames.is_empty() {
-        preview::render(&groom, &options)
+        preview::render_with_surfaces(&groom, &head, &options)
     } else {
         let labels: Vec<String> = args.frames.iter().map(|f| format!("frame {f}")).collect();
         let entries: Vec<SheetEntry> = args
@@ -106,7 +123,7 @@ pub fn run(args: PreviewArgs) -> anyhow::Result<()> {
                 label,
                 groom: &groom,
                 frame: at(frame),
-                surfaces: &[],
+                surfaces: &head,
             })
             .collect();
         sheet(&args, &entries, &options)
@@ -160,6 +177,37 @@ fn read_drawn_frames(
         _ => None,
     };
     Ok((groom, drawn, last))
+}
+
+/// The `--head` mesh as a solid surface in the groom's units (Y up).
+fn read_head(path: &Path, groom: &groom::Groom) -> anyhow::Result<preview::Surface> {
+    let mesh = importers::mesh::read_mesh(path)
+        .map_err(|e| BadInput(format!("--head {}: {e}", path.display())))?;
+    let to_units = (1.0 / groom.units.meters_per_unit) as f32;
+    let mut triangles = Vec::with_capacity(mesh.triangles.len());
+    for (n, triangle) in mesh.triangles.iter().enumerate() {
+        let corner = |i: u32| {
+            mesh.vertices
+                .get(i as usize)
+                .filter(|v| v.iter().all(|c| c.is_finite()))
+                .map(|v| v.map(|c| c * to_units))
+        };
+        match (
+            corner(triangle[0]),
+            corner(triangle[1]),
+            corner(triangle[2]),
+        ) {
+            (Some(a), Some(b), Some(c)) => triangles.push([a, b, c]),
+            _ => {
+                return Err(BadInput(format!(
+                    "--head {}: triangle {n} names a missing or non-finite vertex",
+                    path.display()
+                ))
+                .into())
+            }
+        }
+    }
+    Ok(preview::Surface::head(triangles))
 }
 
 /// A sheet of `--size` in all, or of pictures of `--panel-size` each.

@@ -1,13 +1,17 @@
 //! Preview pictures of grooms: a software renderer that draws strands as
 //! anti-aliased, depth-ordered lines with their width and Kajiya-Kay
-//! shading, framed automatically; optional colouring of a scalar attribute
+//! shading, framed automatically, over a solid, lit head that hides the hair
+//! behind it (`head.rs`) and semi-transparent colliders (`surfaces.rs`); optional colouring of a scalar attribute
 //! through a blue-to-red ramp with a legend; contact sheets of several
 //! pictures with labels; deterministic PNG files.
 
 mod camera;
 mod fit;
 mod font;
+mod head;
+mod legend;
 mod raster;
+mod shading;
 mod shadow;
 mod surfaces;
 
@@ -16,8 +20,11 @@ pub use surfaces::Surface;
 
 use camera::{dot, normalize, sub, Vec3};
 use groom::{AttributeValues, Groom, Scope};
+pub use legend::format_number;
+use legend::{draw_legend, legend_width, text_scale};
 use raster::{Raster, ScreenVertex};
 use rayon::prelude::*;
+use shading::Lights;
 use std::path::{Path, PathBuf};
 
 /// Largest picture side the renderer accepts, pixels.
@@ -286,19 +293,30 @@ pub struct SheetEntry<'a> {
     pub groom: &'a Groom,
     /// As [`PreviewOptions::frame`].
     pub frame: Option<usize>,
-    /// Colliders to draw with the hair, semi-transparent (Y up, the
-    /// groom's units).
+    /// Surfaces to draw with the hair (Y up, the groom's units): a solid
+    /// one (a head) opaque, hiding the hair behind it; the other colliders
+    /// semi-transparent.
     pub surfaces: &'a [Surface],
 }
 
 /// Draws a groom.
 pub fn render(groom: &Groom, options: &PreviewOptions) -> Result<Image, PreviewError> {
+    render_with_surfaces(groom, &[], options)
+}
+
+/// Draws a groom with surfaces (a head: [`Surface::head`]), as
+/// [`SheetEntry::surfaces`].
+pub fn render_with_surfaces(
+    groom: &Groom,
+    surfaces: &[Surface],
+    options: &PreviewOptions,
+) -> Result<Image, PreviewError> {
     let groom = &*smooth(groom);
     let entry = SheetEntry {
         label: "",
         groom,
         frame: options.frame,
-        surfaces: &[],
+        surfaces,
     };
     let scene = Scene::new(&[entry], options)?;
     scene.draw(&entry)
@@ -578,9 +596,15 @@ impl<'o> Scene<'o> {
                     .map(move |&p| up.to_y_up(p))
             })
             .collect();
+        // The head is framed too (the face below short hair); a pillow that
+        // comes from afar is not.
+        let solid_points = entries
+            .iter()
+            .flat_map(|e| e.surfaces.iter().filter(|s| s.solid))
+            .flat_map(|s| s.triangles.iter().flatten());
         let camera = Camera::framing(
             options.view,
-            all_points.iter(),
+            all_points.iter().chain(solid_points),
             [0.0, 0.0],
             framed_width as f32,
             height as f32,
@@ -610,20 +634,42 @@ impl<'o> Scene<'o> {
         if points.len() > u32::MAX as usize {
             return Err(PreviewError::TooManyPoints);
         }
-        let backdrop = match (&self.camera, entry.surfaces.is_empty()) {
-            (Some(camera), false) => surfaces::rasterize(entry.surfaces, camera, width, height),
+        let (solids, others): (Vec<&Surface>, Vec<&Surface>) =
+            entry.surfaces.iter().partition(|s| s.solid);
+        let head = self
+            .camera
+            .as_ref()
+            .and_then(|camera| head::rasterize(&solids, camera, width, height));
+        let head_depth = |pixel: usize| {
+            head.as_ref()
+                .and_then(|h| h.depth.get(pixel).copied())
+                .unwrap_or(f32::INFINITY)
+        };
+        let mut backdrop = match (&self.camera, others.is_empty()) {
+            (Some(camera), false) => surfaces::rasterize(&others, camera, width, height),
             _ => Vec::new(),
         };
+        // A surface behind the head does not show.
+        for (pixel, surface) in backdrop.iter_mut().enumerate() {
+            if surface.is_some_and(|(_, depth)| depth > head_depth(pixel)) {
+                *surface = None;
+            }
+        }
         let background = |row: usize, column: usize| {
             // A neutral grey, a little lighter at the top.
             let f = row as f32 / height.max(1) as f32;
             let v = 0.16 - 0.09 * f;
-            let plain = [v, v, v * 1.04];
-            match backdrop.get(row * width + column) {
-                Some(Some(surface)) => surfaces::mix(plain, *surface, surfaces::BEHIND_HAIR),
+            let pixel = row * width + column;
+            let plain = match &head {
+                Some(head) => head.over(pixel, [v, v, v * 1.04]),
+                None => [v, v, v * 1.04],
+            };
+            match backdrop.get(pixel) {
+                Some(Some((surface, _))) => surfaces::mix(plain, *surface, surfaces::BEHIND_HAIR),
                 _ => plain,
             }
         };
+        let hides_beyond = head.as_ref().map_or(&[][..], |h| &h.hides_beyond[..]);
         let colors = match &options.color_by {
             Some(name) => Some(scalar_values(entry.groom, name)?),
             None => None,
@@ -640,6 +686,7 @@ impl<'o> Scene<'o> {
                     width,
                     height,
                     min_opacity,
+                    hides_beyond,
                 }
                 .render(background)
             }
@@ -649,6 +696,7 @@ impl<'o> Scene<'o> {
                 width,
                 height,
                 min_opacity: 1.0,
+                hides_beyond,
             }
             .render(background),
         };
@@ -656,7 +704,7 @@ impl<'o> Scene<'o> {
         // The surfaces again, faintly over the hair: hair in front of a
         // surface shows, and so does the surface behind hair.
         for (rgb, surface) in pixels.chunks_exact_mut(3).zip(&backdrop) {
-            if let Some(surface) = surface {
+            if let Some((surface, _)) = surface {
                 let over = surface.map(raster::encode_srgb);
                 for (byte, s) in rgb.iter_mut().zip(over) {
                     let mixed =
@@ -923,139 +971,6 @@ pub fn ramp(x: f32) -> [f32; 3] {
         a[1] + (b[1] - a[1]) * f,
         a[2] + (b[2] - a[2]) * f,
     ]
-}
-
-/// A key, a fill and a rim light, fixed relative to the camera so every view
-/// is lit alike.
-struct Lights {
-    key: Vec3,
-    fill: Vec3,
-    rim: Vec3,
-}
-
-impl Lights {
-    fn new(camera: &Camera) -> Lights {
-        let toward = |r: f32, u: f32, b: f32| {
-            normalize([
-                camera.right[0] * r + camera.up[0] * u - camera.forward[0] * b,
-                camera.right[1] * r + camera.up[1] * u - camera.forward[1] * b,
-                camera.right[2] * r + camera.up[2] * u - camera.forward[2] * b,
-            ])
-        };
-        Lights {
-            key: toward(-0.45, 0.65, 0.6),
-            fill: toward(0.8, 0.1, 0.45),
-            rim: toward(0.3, 0.5, -0.8),
-        }
-    }
-
-    /// Kajiya-Kay: diffuse `sin(T, L)`, specular
-    /// `(sin(T,L) sin(T,V) - cos(T,L) cos(T,V))^p` around the reflection cone.
-    fn shade(
-        &self,
-        tangent: Vec3,
-        view: Vec3,
-        base: [f32; 3],
-        occlusion: f32,
-        key_light: f32,
-        mapped: bool,
-    ) -> [f32; 3] {
-        let kk = |light: Vec3, exponent: f32| {
-            let tl = dot(tangent, light).clamp(-1.0, 1.0);
-            let tv = dot(tangent, view).clamp(-1.0, 1.0);
-            let sin_tl = (1.0 - tl * tl).max(0.0).sqrt();
-            let sin_tv = (1.0 - tv * tv).max(0.0).sqrt();
-            let diffuse = sin_tl;
-            let specular = (sin_tl * sin_tv - tl * tv).max(0.0).powf(exponent);
-            (diffuse, specular)
-        };
-        let (key_diffuse, key_specular) = kk(self.key, 80.0);
-        let (_, key_broad) = kk(self.key, 12.0);
-        let (fill_diffuse, _) = kk(self.fill, 1.0);
-        let (_, rim_specular) = kk(self.rim, 20.0);
-        // Mapped colours keep more ambient light so the ramp stays legible.
-        let ambient = if mapped { 0.35 } else { 0.12 };
-        let diffuse = ambient + 0.85 * key_light * key_diffuse + 0.3 * fill_diffuse;
-        let specular_strength = if mapped { 0.12 } else { 0.2 };
-        // The sharp highlight is a warm white (light reflected at the cuticle);
-        // the broad one and the rim carry the hair's own colour (light that
-        // went through the fibre).
-        const HIGHLIGHT: [f32; 3] = [1.0, 0.9, 0.8];
-        let mut color = [0.0; 3];
-        for ((c, b), h) in color.iter_mut().zip(base).zip(HIGHLIGHT) {
-            *c = (b * (diffuse + 0.5 * key_light * key_broad + 0.8 * rim_specular)
-                + specular_strength * h * key_light * key_specular)
-                * occlusion;
-        }
-        color
-    }
-}
-
-/// Font scale for a picture of this size.
-fn text_scale(side: u32) -> u32 {
-    (side / 320).clamp(1, 4)
-}
-
-fn legend_width(width: u32, height: u32) -> u32 {
-    let scale = text_scale(width.min(height));
-    // Room for "-0.000e-00".
-    (font::text_width("-1.23e-45", scale) + 8 * scale).min(width / 3)
-}
-
-/// Formats a legend number with about three significant digits.
-pub fn format_number(v: f32) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let a = v.abs();
-    if !(1e-3..1e4).contains(&a) {
-        return format!("{v:.2e}");
-    }
-    let decimals = (2 - a.log10().floor() as i32).clamp(0, 4) as usize;
-    format!("{v:.decimals$}")
-}
-
-/// A vertical ramp bar at the right with the attribute name and the range.
-fn draw_legend(image: &mut Image, legend_width: u32, name: &str, range: Option<(f32, f32)>) {
-    let scale = text_scale(image.width.min(image.height));
-    let (width, height) = (i64::from(image.width), i64::from(image.height));
-    let left = width - i64::from(legend_width);
-    let line = i64::from((font::GLYPH_HEIGHT + 4) * scale);
-    let bar_width = i64::from(6 * scale);
-    let bar_x = left + i64::from(4 * scale);
-    let bar_top = height / 6 + 2 * line;
-    let bar_bottom = height - height / 6 - line;
-    let white = [235, 235, 235];
-    // The name, right-aligned so a long one runs into the picture, not off it.
-    let name_width = i64::from(font::text_width(name, scale));
-    let name_x = (width - name_width - i64::from(4 * scale)).max(0);
-    font::draw_text(image, name_x, height / 6, scale, white, name);
-    let Some((lo, hi)) = range else {
-        font::draw_text(image, bar_x, bar_top, scale, white, "no data");
-        return;
-    };
-    let span = (bar_bottom - bar_top).max(1);
-    for row in bar_top..bar_bottom {
-        let x = 1.0 - (row - bar_top) as f32 / span as f32;
-        let rgb = ramp(x).map(raster::encode_srgb);
-        image.fill_rect(bar_x, row, bar_width, 1, rgb);
-    }
-    font::draw_text(
-        image,
-        bar_x,
-        bar_top - line,
-        scale,
-        white,
-        &format_number(hi),
-    );
-    font::draw_text(
-        image,
-        bar_x,
-        bar_bottom + i64::from(4 * scale),
-        scale,
-        white,
-        &format_number(lo),
-    );
 }
 
 #[cfg(test)]

@@ -57,6 +57,9 @@ pub(crate) struct Raster<'a> {
     /// Opacity of a hair narrower than a pixel never drops below this, so a
     /// sparse groom stays visible while a dense one keeps its soft look.
     pub min_opacity: f32,
+    /// Per pixel, the depth beyond which hair is hidden (behind the head);
+    /// empty: nothing hides it.
+    pub hides_beyond: &'a [f32],
 }
 
 /// Order key: far before near, ties by segment index (so the order is total).
@@ -333,6 +336,9 @@ impl Raster<'_> {
                 continue;
             }
             let line = (row - row0) * self.width;
+            let hides = self
+                .hides_beyond
+                .get(row * self.width + first..=row * self.width + last);
             let Some(pixels) = buffer.get_mut(line + first..=line + last) else {
                 continue;
             };
@@ -349,12 +355,16 @@ impl Raster<'_> {
                 if coverage <= 0.0 {
                     continue;
                 }
+                let depth = a.depth + (b.depth - a.depth) * t;
+                if hides.is_some_and(|h| h.get(column - first).is_some_and(|&h| depth > h)) {
+                    continue;
+                }
                 let alpha = coverage * (opacity0 + (opacity1 - opacity0) * t);
                 let color = [0, 1, 2].map(|k| (a.color[k] + (b.color[k] - a.color[k]) * t) * alpha);
                 blend(
                     pixel,
                     Layer {
-                        depth: a.depth + (b.depth - a.depth) * t,
+                        depth,
                         color,
                         transmit: 1.0 - alpha,
                     },

@@ -1,7 +1,8 @@
-//! Surfaces drawn with the hair (a head, a pillow, a plate): triangles
-//! rasterised flat-shaded with a depth buffer into a layer that lies behind
-//! the hair and, faintly, over it, so that hair behind a surface still shows
-//! and the surface still shows where hair covers it.
+//! Surfaces drawn with the hair. A solid one (a head) is drawn opaque and
+//! lit (`head.rs`). The others (a pillow, a plate): triangles rasterised
+//! flat-shaded with a depth buffer into a layer that lies behind the hair
+//! and, faintly, over it, so that hair behind such a surface still shows and
+//! the surface still shows where hair covers it.
 //!
 //! Hand-written rather than a crate: a few thousand triangles at preview
 //! size, drawn once per picture, with the camera the hair uses.
@@ -14,21 +15,38 @@ use super::camera::{cross, dot, normalize, sub, Camera, Vec3};
 pub struct Surface {
     pub triangles: Vec<[[f32; 3]; 3]>,
     pub color: [f32; 3],
+    /// Opaque and smooth-shaded, hiding the hair behind it (a head); else
+    /// semi-transparent (a pillow that comes and goes).
+    pub solid: bool,
 }
+
+impl Surface {
+    /// A head: solid, skin-coloured.
+    pub fn head(triangles: Vec<[[f32; 3]; 3]>) -> Surface {
+        Surface {
+            triangles,
+            color: super::head::SKIN,
+            solid: true,
+        }
+    }
+}
+
+/// The nearest surface at each pixel: its shaded colour and its depth.
+pub(crate) type Layer = Vec<Option<([f32; 3], f32)>>;
 
 /// How much of a surface's colour replaces the background behind the hair.
 pub(crate) const BEHIND_HAIR: f32 = 0.6;
 /// How much of a surface's colour is laid over the finished picture.
 pub(crate) const OVER_HAIR: f32 = 0.22;
 
-/// The shaded colour of the nearest surface at every pixel (row-major),
-/// `None` where no surface is.
+/// The shaded colour and depth of the nearest surface at every pixel
+/// (row-major), `None` where no surface is.
 pub(crate) fn rasterize(
-    surfaces: &[Surface],
+    surfaces: &[&Surface],
     camera: &Camera,
     width: usize,
     height: usize,
-) -> Vec<Option<[f32; 3]>> {
+) -> Layer {
     let mut color = vec![None; width * height];
     let mut depth = vec![f32::INFINITY; width * height];
     for surface in surfaces {
@@ -45,6 +63,10 @@ pub(crate) fn rasterize(
         }
     }
     color
+        .into_iter()
+        .zip(depth)
+        .map(|(c, d)| c.map(|c| (c, d)))
+        .collect()
 }
 
 fn draw_triangle(

@@ -554,3 +554,125 @@ fn a_constant_attribute_is_drawn_at_the_end_of_the_ramp_it_reaches() {
     assert_eq!(widen_constant((0.0, 0.0)), (0.0, 1.0));
     assert_eq!(widen_constant((0.2, 0.7)), (0.2, 0.7));
 }
+
+/// A ball of `radius` at the origin as a head surface.
+fn ball_head(radius: f32) -> Surface {
+    let (vertices, indices) = crate::sim::parry3d::shape::Ball::new(radius).to_trimesh(48, 24);
+    let triangles = indices
+        .iter()
+        .map(|t| t.map(|i| vertices[i as usize]).map(|v| [v.x, v.y, v.z]))
+        .collect();
+    Surface::head(triangles)
+}
+
+fn is_skin(p: [u8; 3]) -> bool {
+    p[0] > 120 && p[0] as i32 > p[1] as i32 + 20 && p[1] as i32 > p[2] as i32 + 5
+}
+
+/// Brown hair, darker than skin.
+fn is_hair(p: [u8; 3]) -> bool {
+    p[0] < 110 && p[0] as i32 > p[2] as i32 + 10
+}
+
+#[test]
+fn the_head_is_skin_coloured_and_hides_the_hair_behind_it() {
+    let radius = 0.1;
+    // A strand behind the head, one across in front of it, and one lying on
+    // the face (half a millimetre above the surface).
+    let behind: Vec<[f32; 3]> = (0..=12)
+        .map(|i| [0.0, i as f32 * 0.05 - 0.3, -0.15])
+        .collect();
+    let across: Vec<[f32; 3]> = (0..=12)
+        .map(|i| [i as f32 * 0.05 - 0.3, -0.05, 0.15])
+        .collect();
+    let lying: Vec<[f32; 3]> = (0..=12)
+        .map(|i| {
+            let y = i as f32 * 0.01 - 0.06;
+            let r = radius + 5e-4;
+            [0.05, y, (r * r - 0.05 * 0.05 - y * y).sqrt()]
+        })
+        .collect();
+    let mut groom = Groom::from_strands([behind, across, lying]);
+    groom.set_attribute(Attribute::per_strand(
+        "width",
+        AttributeValues::Float(vec![0.02, 0.02, 0.01]),
+    ));
+    let head = [ball_head(radius)];
+    let image = render_with_surfaces(&groom, &head, &options(200, 200)).unwrap();
+    // The groom spans 0.6 each way, framed with a 6 % margin, centred.
+    let scale = 200.0 * 0.88 / 0.6;
+    let at = |x: f32, y: f32| {
+        image
+            .pixel((100.0 + x * scale) as u32, (100.0 - y * scale) as u32)
+            .unwrap()
+    };
+    let face = at(-0.05, 0.03);
+    assert!(is_skin(face), "the face is skin-coloured: {face:?}");
+    let over_behind = at(0.0, 0.03);
+    assert!(
+        is_skin(over_behind),
+        "the strand behind the head is hidden: {over_behind:?}"
+    );
+    let above = at(0.0, 0.25);
+    assert!(is_hair(above), "the strand shows above the head: {above:?}");
+    let front = at(-0.05, -0.05);
+    assert!(
+        is_hair(front),
+        "the strand in front covers the face: {front:?}"
+    );
+    let on_face = at(0.05, 0.0);
+    assert!(
+        is_hair(on_face),
+        "hair lying on the face shows: {on_face:?}"
+    );
+    // Lit, not flat: the lit side of the face is lighter than its edge.
+    let edge = at(-0.093, 0.0);
+    assert!(
+        is_skin(edge) && edge[0] < face[0],
+        "the face {face:?} and its edge {edge:?}"
+    );
+    // The same picture for any thread count.
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| render_with_surfaces(&groom, &head, &options(200, 200)).unwrap());
+    assert_eq!(one, image);
+}
+
+#[test]
+fn head_samples_draw_their_head_solid_from_three_quarters() {
+    use crate::timeline::{bake::sheet_options, surfaces::snapshot_surfaces, Timeline};
+    let samples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    // (sample, solid surfaces before the first stage, others then)
+    for (name, solid, other) in [
+        // The wind model's own head ellipsoid.
+        ("wind.toml", 1, 0),
+        // A mesh head (an always-active collider); the pillow comes later.
+        ("bed_head.toml", 1, 0),
+        // A ball head.
+        ("full_head.toml", 1, 0),
+        // A swatch: no head; its plate is drawn as before.
+        ("blow_dry.toml", 0, 0),
+    ] {
+        let timeline = Timeline::load(&samples.join(name)).unwrap();
+        let surfaces = snapshot_surfaces(&timeline, &[]).unwrap();
+        let before = &surfaces[0];
+        assert_eq!(
+            before.iter().filter(|s| s.solid).count(),
+            solid,
+            "{name}: heads"
+        );
+        assert_eq!(
+            before.iter().filter(|s| !s.solid).count(),
+            other,
+            "{name}: other surfaces"
+        );
+        assert!(before
+            .iter()
+            .filter(|s| s.solid)
+            .all(|s| s.color == head::SKIN && s.triangles.len() > 500));
+        let view = sheet_options(&timeline, &[]).view;
+        assert_eq!(view == View::Persp, solid > 0, "{name}: view {view:?}");
+    }
+}

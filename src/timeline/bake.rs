@@ -229,8 +229,9 @@ fn groom_now(base: &Groom, strands: &StrandSet, points: Vec<[f32; 3]>, with_stat
 }
 
 /// The preview options of the timeline's `[preview]` (or the defaults). The
-/// view, unless the timeline names one, is the one that shows most of the
-/// change from the first to the last snapshot.
+/// view, unless the timeline names one, is three quarters in front for a
+/// timeline with a head, else the one that shows most of the change from the
+/// first to the last snapshot.
 pub fn sheet_options(
     timeline: &Timeline,
     snapshots: &[(String, Groom)],
@@ -243,6 +244,8 @@ pub fn sheet_options(
         .and_then(|p| p.view.get_ref().parse().ok());
     options.view = match (named_view, snapshots.first(), snapshots.last()) {
         (Some(view), _, _) => view,
+        // A head is seen as a TD first looks at a groom: from three quarters.
+        _ if super::surfaces::draws_a_head(timeline) => crate::preview::View::Persp,
         (None, Some((_, first)), Some((_, last))) => {
             crate::preview::view_showing_change(first, last)
         }

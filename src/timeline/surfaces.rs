@@ -2,6 +2,14 @@
 //! each snapshot of a bake (before the first stage, after each stage), the
 //! colliders active then, where their motion has them, and for a snapshot
 //! during a perm the rods the hair is wound on.
+//!
+//! The head is drawn solid (opaque, skin-coloured, hiding the hair behind
+//! it): each collider active in every stage (`active = "always"`, the
+//! schema's head) and the head ellipsoid of a `wind` stage; with neither,
+//! the head a `[groom] generate` of layout `scalp` or `head` rooted the
+//! hair on (its `scalp_mesh`, or the ellipsoid of `head_center` and
+//! `head_radii`). Colliders that come and go (a pillow) stay
+//! semi-transparent.
 
 use super::error::BakeError;
 use super::motion::pose_at;
@@ -35,6 +43,9 @@ pub struct RodSnapshot {
 /// Subdivisions of round shapes: smooth enough at preview sizes.
 const ROUND_SUBDIVISIONS: u32 = 24;
 
+/// Subdivisions of a round head: its outline stays round in a large picture.
+const HEAD_SUBDIVISIONS: u32 = 64;
+
 /// The surfaces to draw with each snapshot of a bake of `timeline`: first the
 /// colliders of the first stage at time 0, then, for each stage, the
 /// colliders of that stage at its end; and, at the places `rods` name
@@ -47,8 +58,19 @@ pub fn snapshot_surfaces(
     let colliders = &timeline.file.colliders;
     let meshes = colliders
         .iter()
-        .map(|c| Ok(triangles_of(&shape_of(timeline, c.shape.get_ref())?)))
+        .map(|c| {
+            let subdivisions = if c.active == ColliderActivity::Always {
+                HEAD_SUBDIVISIONS
+            } else {
+                ROUND_SUBDIVISIONS
+            };
+            Ok(triangles_of(
+                &shape_of(timeline, c.shape.get_ref())?,
+                subdivisions,
+            ))
+        })
         .collect::<Result<Vec<_>, BakeError>>()?;
+    let heads = heads_without_collider(timeline)?;
     let stages = timeline.file.stages.get_ref();
     let surfaces_at = |stage: usize, time: f64| -> Vec<Surface> {
         let Some(spec) = stages.get(stage) else {
@@ -74,11 +96,18 @@ pub fn snapshot_surfaces(
                         [p.x, p.y, p.z]
                     })
                     .collect();
-                Some(Surface {
-                    triangles: corners(&placed, triangles),
-                    color: COLLIDER_COLOR,
+                let triangles = corners(&placed, triangles);
+                Some(if c.active == ColliderActivity::Always {
+                    Surface::head(triangles)
+                } else {
+                    Surface {
+                        triangles,
+                        color: COLLIDER_COLOR,
+                        solid: false,
+                    }
                 })
             })
+            .chain(heads.iter().cloned())
             .collect()
     };
     let mut out = vec![surfaces_at(0, 0.0)];
@@ -113,7 +142,78 @@ fn rod_surface(rod: &RodCylinder) -> Surface {
     Surface {
         triangles: corners(&placed, &triangles),
         color: ROD_COLOR,
+        solid: false,
     }
+}
+
+/// Whether the snapshots of `timeline` draw a head (a collider always
+/// active, a wind stage's head, or the head a generated groom grows on).
+pub fn draws_a_head(timeline: &Timeline) -> bool {
+    use crate::generate::RootLayout;
+    let file = &timeline.file;
+    file.colliders
+        .iter()
+        .any(|c| c.active == ColliderActivity::Always)
+        || file.stages.get_ref().iter().any(|s| s.wind.is_some())
+        || file
+            .groom
+            .generate
+            .as_ref()
+            .is_some_and(|g| matches!(g.get_ref().layout, RootLayout::Head | RootLayout::Scalp))
+}
+
+/// The heads that are no collider: the ellipsoid of each `wind` stage; with
+/// no head at all (neither that nor an always-active collider), the one a
+/// generated groom is rooted on.
+fn heads_without_collider(timeline: &Timeline) -> Result<Vec<Surface>, BakeError> {
+    use crate::generate::RootLayout;
+    let mut heads: Vec<Surface> = Vec::new();
+    for stage in timeline.file.stages.get_ref() {
+        if let Some(wind) = &stage.wind {
+            let head = &wind.get_ref().head;
+            heads.push(ellipsoid(
+                head.center.map(|c| c as f32),
+                head.radii.map(|r| r as f32),
+            ));
+        }
+    }
+    let has_head = timeline
+        .file
+        .colliders
+        .iter()
+        .any(|c| c.active == ColliderActivity::Always);
+    let generated = timeline.file.groom.generate.as_ref().map(|g| g.get_ref());
+    if let (false, true, Some(p)) = (has_head, heads.is_empty(), generated) {
+        match (&p.layout, &p.scalp_mesh) {
+            (RootLayout::Head, Some(mesh)) => {
+                let path = timeline.resolve(&mesh.to_string_lossy());
+                let mesh = importers::mesh::read_mesh(&path).map_err(|e| BakeError::Input {
+                    file: path.clone(),
+                    message: format!("the scalp mesh: {e}"),
+                })?;
+                heads.push(Surface::head(corners(&mesh.vertices, &mesh.triangles)));
+            }
+            (RootLayout::Head | RootLayout::Scalp, _) => {
+                heads.push(ellipsoid(p.head_center, p.head_radii));
+            }
+            _ => {}
+        }
+    }
+    Ok(heads)
+}
+
+/// A head ellipsoid of `center` and semi-axes `radii`.
+fn ellipsoid(center: [f32; 3], radii: [f32; 3]) -> Surface {
+    let (vertices, triangles) = crate::sim::parry3d::shape::Ball::new(1.0)
+        .to_trimesh(HEAD_SUBDIVISIONS, HEAD_SUBDIVISIONS / 2);
+    let placed: Vec<[f32; 3]> = vertices
+        .iter()
+        .map(|v| {
+            let unit = [v.x, v.y, v.z];
+            [0, 1, 2].map(|k| center[k] + radii[k] * unit[k])
+        })
+        .collect();
+    Surface::head(corners(&placed, &triangles))
 }
 
 /// Each indexed triangle as its three placed corners.
@@ -132,15 +232,15 @@ fn corners(placed: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[[f32; 3]; 3]> {
 
 /// The triangles of a collider shape in its own frame; `None` for a
 /// half-space, which has no finite surface to draw.
-fn triangles_of(shape: &SharedShape) -> Option<(Vec<Vector>, Vec<[u32; 3]>)> {
+fn triangles_of(shape: &SharedShape, subdivisions: u32) -> Option<(Vec<Vector>, Vec<[u32; 3]>)> {
     if let Some(cuboid) = shape.as_cuboid() {
         Some(cuboid.to_trimesh())
     } else if let Some(ball) = shape.as_ball() {
-        Some(ball.to_trimesh(ROUND_SUBDIVISIONS, ROUND_SUBDIVISIONS / 2))
+        Some(ball.to_trimesh(subdivisions, subdivisions / 2))
     } else if let Some(capsule) = shape.as_capsule() {
-        Some(capsule.to_trimesh(ROUND_SUBDIVISIONS, ROUND_SUBDIVISIONS / 2))
+        Some(capsule.to_trimesh(subdivisions, subdivisions / 2))
     } else if let Some(cylinder) = shape.as_cylinder() {
-        Some(cylinder.to_trimesh(ROUND_SUBDIVISIONS))
+        Some(cylinder.to_trimesh(subdivisions))
     } else {
         shape
             .as_trimesh()

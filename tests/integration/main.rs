@@ -11,6 +11,7 @@ mod bake;
 mod batch;
 mod batch_resume;
 mod bench;
+mod blow_dry_head;
 mod cli;
 mod diff;
 mod formats;

@@ -387,11 +387,13 @@ fn timeline_preview_draws_its_colliders() {
 generate = { layout = "swatch", strands = 12, length = 0.12, segment_length = 0.02, swatch_width = 0.06 }
 [[collider]]
 name = "ball"
+active = "listed"
 shape = { ball = { radius = 0.025 } }
 motion = [{ t = 0.0, translation = [0.0, -0.06, -0.05] }]
 [[stage]]
 kind = "settle"
 duration = 0.05
+colliders = ["ball"]
 "#;
     std::fs::write(dir.path("ball.toml"), toml).unwrap();
     dir.run_ok(&[
@@ -407,8 +409,8 @@ duration = 0.05
         "160x160",
     ]);
     let (width, _, pixels) = decode(&dir.path("ball.png"));
-    // The collider's grey-blue: light and bluer than the (warm) hair and
-    // the (neutral) background.
+    // A collider that comes and goes is drawn in grey-blue: light and
+    // bluer than the (warm) hair and the (neutral) background.
     let collider: Vec<usize> = pixels
         .chunks_exact(3)
         .enumerate()
@@ -420,6 +422,112 @@ duration = 0.05
         "only {} collider pixels in a {width} px wide picture",
         collider.len()
     );
+}
+
+/// Pixels of the head's skin: light, red above green above blue (the hair
+/// is darker, the background neutral grey).
+fn skin_pixels(pixels: &[u8]) -> Vec<usize> {
+    pixels
+        .chunks_exact(3)
+        .enumerate()
+        .filter(|(_, p)| {
+            p[0] > 120
+                && i32::from(p[0]) > i32::from(p[1]) + 20
+                && i32::from(p[1]) > i32::from(p[2]) + 5
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
+#[test]
+fn a_head_is_drawn_solid_in_skin_under_the_hair() {
+    let dir = TestDir::new();
+    let head_mesh = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/head.obj");
+    let head_mesh = head_mesh.to_str().unwrap();
+    // A combed head of 24 cm hair on the ellipsoid head.obj is.
+    dir.run_ok(&[
+        "generate",
+        "head",
+        "-o",
+        "head.usda",
+        "--strands",
+        "3000",
+        "--length",
+        "0.24",
+        "--segment-length",
+        "0.01",
+    ]);
+    let view = ["--view", "persp", "--size", "200x200"];
+    dir.run_ok(&[&["preview", "head.usda", "-o", "bare.png"][..], &view].concat());
+    dir.run_ok(
+        &[
+            &[
+                "preview",
+                "head.usda",
+                "-o",
+                "head.png",
+                "--head",
+                head_mesh,
+            ][..],
+            &view,
+        ]
+        .concat(),
+    );
+    let (_, _, bare) = decode(&dir.path("bare.png"));
+    let (width, _, drawn) = decode(&dir.path("head.png"));
+    // The face shows in skin (a few thousand pixels of a 200 x 200 picture);
+    // without the head, the inside of the back hair shows there.
+    let skin = skin_pixels(&drawn);
+    assert!(skin.len() > 1500, "{} skin pixels", skin.len());
+    assert!(skin_pixels(&bare).len() < 50);
+    // The face is in front, the head at the top of the 24 cm hair: the
+    // middle of the skin lies in the middle third across, the top half down.
+    let (sx, sy) = skin.iter().fold((0, 0), |(x, y), &i| {
+        (x + i % width as usize, y + i / width as usize)
+    });
+    let centre = (sx / skin.len(), sy / skin.len());
+    assert!(
+        (66..134).contains(&centre.0) && (20..100).contains(&centre.1),
+        "skin centred at {centre:?}"
+    );
+    // A timeline draws its own head: --head does not apply.
+    std::fs::write(
+        dir.path("t.toml"),
+        "[groom]\ngenerate = { layout = \"swatch\", strands = 4 }\n[[stage]]\nkind = \"settle\"\nduration = 0.01\n",
+    )
+    .unwrap();
+    let stderr = dir.run_fail(
+        &["preview", "t.toml", "-o", "t.png", "--head", head_mesh],
+        2,
+    );
+    assert!(
+        stderr.contains("--head") && stderr.contains("t.toml"),
+        "{stderr}"
+    );
+    assert!(!dir.path("t.png").exists());
+}
+
+#[test]
+fn a_collider_in_every_stage_is_the_head() {
+    let dir = TestDir::new();
+    // The swatch hangs in front of a ball head that is always there.
+    let toml = r#"seed = 1
+[groom]
+generate = { layout = "swatch", strands = 12, length = 0.12, segment_length = 0.02, swatch_width = 0.06 }
+[[collider]]
+name = "head"
+shape = { ball = { radius = 0.05 } }
+motion = [{ t = 0.0, translation = [0.0, -0.06, -0.06] }]
+[[stage]]
+kind = "settle"
+duration = 0.05
+"#;
+    std::fs::write(dir.path("head.toml"), toml).unwrap();
+    let args = ["--frame", "0", "--view", "front", "--size", "160x160"];
+    dir.run_ok(&[&["preview", "head.toml", "-o", "head.png"][..], &args].concat());
+    let (_, _, pixels) = decode(&dir.path("head.png"));
+    let skin = skin_pixels(&pixels);
+    assert!(skin.len() > 1000, "{} skin pixels", skin.len());
 }
 
 /// Pixels of a perm rod's pink: red well above green and blue above green
