@@ -11,6 +11,8 @@ pub use super::prepare::{load_groom, material_of, parameters_of, prepare, Prepar
 use super::report::{size_and_sha256, BakeReport, OutputReport, StageReport, WatchdogReport};
 use super::schema::{ColliderActivity, ExportWhat, StageKind};
 use super::shapes::pose_of;
+use super::sheet::{sheet_curve_form, write_sheet};
+pub use super::sheet::{sheet_image, sheet_options};
 use super::stages::{drive_wetness, PermRods, StagePlan, WindPlan};
 use super::Timeline;
 use crate::sim::{
@@ -226,80 +228,6 @@ fn groom_now(base: &Groom, strands: &StrandSet, points: Vec<[f32; 3]>, with_stat
         }
     }
     groom
-}
-
-/// The preview options of the timeline's `[preview]` (or the defaults). The
-/// view, unless the timeline names one, is three quarters in front for a
-/// timeline with a head, else the one that shows most of the change from the
-/// first to the last snapshot.
-pub fn sheet_options(
-    timeline: &Timeline,
-    snapshots: &[(String, Groom)],
-) -> crate::preview::PreviewOptions {
-    let mut options = crate::preview::PreviewOptions::default();
-    let named_view = timeline
-        .file
-        .preview
-        .as_ref()
-        .and_then(|p| p.view.get_ref().parse().ok());
-    options.view = match (named_view, snapshots.first(), snapshots.last()) {
-        (Some(view), _, _) => view,
-        // A head is seen as a TD first looks at a groom: from three quarters.
-        _ if super::surfaces::draws_a_head(timeline) => crate::preview::View::Persp,
-        (None, Some((_, first)), Some((_, last))) => {
-            crate::preview::view_showing_change(first, last)
-        }
-        _ => options.view,
-    };
-    if let Some(p) = &timeline.file.preview {
-        let [w, h] = *p.size.get_ref();
-        options.width = w;
-        options.height = h;
-        options.color_by = p.color.as_ref().map(|c| c.get_ref().clone());
-    }
-    options
-}
-
-/// The curve form of the sheet's pictures: `[preview] resample`, if given.
-fn sheet_curve_form(timeline: &Timeline) -> groom::curves::CurveForm {
-    match timeline.file.preview.as_ref().and_then(|p| p.resample) {
-        Some(segment) => groom::curves::CurveForm::Resampled { segment },
-        None => groom::curves::CurveForm::Polyline,
-    }
-}
-
-/// Renders the before/after sheet of a bake and writes it as a PNG.
-fn write_sheet(
-    timeline: &Timeline,
-    snapshots: &[(String, Groom)],
-    rods: &[super::surfaces::RodSnapshot],
-    path: &Path,
-) -> Result<(), BakeError> {
-    crate::preview::write_png(&sheet_image(timeline, snapshots, rods)?, path)?;
-    Ok(())
-}
-
-/// The before/after contact sheet of a bake's snapshots, with the colliders
-/// active in each and a perm's rods (the sheet export and the HTML report
-/// draw the same).
-pub fn sheet_image(
-    timeline: &Timeline,
-    snapshots: &[(String, Groom)],
-    rods: &[super::surfaces::RodSnapshot],
-) -> Result<crate::preview::Image, BakeError> {
-    let options = sheet_options(timeline, snapshots);
-    let surfaces = super::surfaces::snapshot_surfaces(timeline, rods)?;
-    let entries: Vec<crate::preview::SheetEntry> = snapshots
-        .iter()
-        .zip(&surfaces)
-        .map(|((label, groom), surfaces)| crate::preview::SheetEntry {
-            label,
-            groom,
-            frame: None,
-            surfaces,
-        })
-        .collect();
-    Ok(crate::preview::render_sheet(&entries, &options)?)
 }
 
 /// Creates the folder an output goes into.

@@ -20,6 +20,7 @@ pub mod render;
 pub mod report;
 pub mod schema;
 mod shapes;
+mod sheet;
 pub mod stages;
 pub mod surfaces;
 
