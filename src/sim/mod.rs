@@ -358,9 +358,10 @@ impl Default for Inextensibility {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Integrator {
-    /// Backward Euler: the solve balances the forces at the step's end.
-    /// Stable and exact in statics, but it damps a mode of angular
-    /// frequency `w` by about `exp(-pi w dt)` a cycle by itself.
+    /// Backward Euler (the default): the solve balances the forces at the
+    /// step's end. Stable and exact in statics, but it damps a mode of
+    /// angular frequency `w` by about `exp(-pi w dt)` a cycle by itself.
+    #[default]
     BackwardEuler,
     /// A backward-Euler half step, then the state extrapolated to the
     /// step's end (the implicit midpoint rule) with the stiff modes
@@ -369,7 +370,6 @@ pub enum Integrator {
     /// modes. A strand the extrapolation is not safe for this step (near
     /// a collider, held, blown, touching hair, its root moved, edges too
     /// fine for the `dt`, turning fast) takes backward Euler's step.
-    #[default]
     Midpoint,
 }
 
@@ -410,7 +410,8 @@ pub struct SolverParameters {
     pub quaternion_mass_scale: f32,
     pub inextensibility: Inextensibility,
     /// The physical model's time integrator (docs/model.md "Time
-    /// integration"); the paper model ignores it (its step is the paper's).
+    /// integration"; `[solver] integrator`, which the paper model refuses:
+    /// its step is the paper's).
     pub integrator: Integrator,
 }
 

@@ -20,11 +20,11 @@
 //! 5. `update_bonds` (bonds, rod/shape_memory.rs): the bond update (17);
 //! 6. `commit` (forces, here): the working copy written back.
 //!
-//! The physical model's step is, per strand, the midpoint step
-//! (rod/midpoint.rs: the phases above over half the step with the half
-//! step's context, `Context::half`, then `extrapolate` to the step's end,
-//! which also finds the velocities) where it is safe (`takes_midpoint`),
-//! else backward Euler (the solve balances the forces against the inertia
+//! The physical model's step is backward Euler, or with
+//! `Integrator::Midpoint`, per strand, the midpoint step (rod/midpoint.rs:
+//! the phases above over half the step with the half step's context,
+//! `Context::half`, then `extrapolate` to the step's end, which also finds
+//! the velocities) where it is safe (`takes_midpoint`). Backward Euler (the solve balances the forces against the inertia
 //! at the step's end, velocities come from the change): stable for hair's
 //! stiff stretch/shear at any `dt` and exact in statics, but it damps a
 //! mode of angular frequency `w` by about `exp(-pi w dt)` a cycle on top
