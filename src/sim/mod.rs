@@ -353,6 +353,26 @@ impl Default for Inextensibility {
     }
 }
 
+/// The physical model's time integrator (docs/model.md "Time
+/// integration").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Integrator {
+    /// Backward Euler (the default): the solve balances the forces at the
+    /// step's end. Stable and exact in statics, but it damps a mode of
+    /// angular frequency `w` by about `exp(-pi w dt)` a cycle by itself.
+    #[default]
+    BackwardEuler,
+    /// A backward-Euler half step, then the state extrapolated to the
+    /// step's end (the implicit midpoint rule) with the stiff modes
+    /// projected and the extrapolation smoothed along the strand
+    /// (rod/midpoint.rs): second order, with little damping of the slow
+    /// modes. A strand the extrapolation is not safe for this step (near
+    /// a collider, held, blown, touching hair, its root moved, edges too
+    /// fine for the `dt`, turning fast) takes backward Euler's step.
+    Midpoint,
+}
+
 /// Solver settings (000 Table 1 and METHOD G).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -389,6 +409,10 @@ pub struct SolverParameters {
     /// `w_q = scale * w_p / l^2` for each edge frame.
     pub quaternion_mass_scale: f32,
     pub inextensibility: Inextensibility,
+    /// The physical model's time integrator (docs/model.md "Time
+    /// integration"; `[solver] integrator`, which the paper model refuses:
+    /// its step is the paper's).
+    pub integrator: Integrator,
 }
 
 impl Default for SolverParameters {
@@ -406,6 +430,7 @@ impl Default for SolverParameters {
             angular_damping: 2.0,
             quaternion_mass_scale: 1.0,
             inextensibility: Inextensibility::default(),
+            integrator: Integrator::default(),
         }
     }
 }

@@ -20,12 +20,15 @@
 //! 5. `update_bonds` (bonds, rod/shape_memory.rs): the bond update (17);
 //! 6. `commit` (forces, here): the working copy written back.
 //!
-//! The physical model's step is backward Euler (the solve balances the
-//! forces against the inertia at the step's end, velocities come from the
-//! change): stable for hair's stiff stretch/shear at any `dt` and exact in
-//! statics, but it damps a mode of angular frequency `w` by about
-//! `exp(-pi w dt)` a cycle on top of `damping` (docs/model.md "Time
-//! integration", measured by `backward_euler_damps_the_released_hair_as_documented`).
+//! The physical model's step is backward Euler, or with
+//! `Integrator::Midpoint`, per strand, the midpoint step (rod/midpoint.rs:
+//! the phases above over half the step with the half step's context,
+//! `Context::half`, then `extrapolate` to the step's end, which also finds
+//! the velocities) where it is safe (`takes_midpoint`). Backward Euler (the solve balances the forces against the inertia
+//! at the step's end, velocities come from the change): stable for hair's
+//! stiff stretch/shear at any `dt` and exact in statics, but it damps a
+//! mode of angular frequency `w` by about `exp(-pi w dt)` a cycle on top
+//! of `damping` (docs/model.md "Time integration").
 //!
 //! Strands run in parallel; each works on a cache-resident copy of its
 //! state and commits it only if it is finite. With the phase clock on
@@ -42,13 +45,14 @@ use super::quarantine::all_finite;
 use super::rod::bonds::Drive;
 use super::rod::direct::{Direct, DirectInput, RodMaterial};
 use super::rod::lanes::{Group, LaneInput, LANES};
+use super::rod::midpoint::{extrapolate, takes_midpoint};
 use super::rod::real::{F64x8, Real, WIDE};
 use super::rod::shape_memory::{rest_shape, rest_shapes_in_lanes, update_bonds};
 use super::rod::solve::{direct_input, end_constraints, newton_iterations};
 use super::work::{Context, PhaseClock, StrandMut, Work};
 use super::{
-    ColliderSet, Environment, Gravity, Hold, Inextensibility, Model, PhaseTimes, SimError,
-    SolverParameters, StepReport, StrandSet,
+    ColliderSet, Environment, Gravity, Hold, Inextensibility, Integrator, Model, PhaseTimes,
+    SimError, SolverParameters, StepReport, StrandSet,
 };
 use rayon::prelude::*;
 
@@ -381,6 +385,28 @@ impl Solver {
                 }),
             },
             phase_clock: *phase_clock,
+            half: None,
+        };
+        // The midpoint step (rod/midpoint.rs) where the step allows it:
+        // the half step's context is this one with half the `dt`.
+        let midpoint = strands.material.model == Model::Physical
+            && parameters.integrator == Integrator::Midpoint
+            && context.blower.is_none()
+            && context.hold.is_none()
+            && context.hair_hair.is_none()
+            && context.hair_contacts.is_none()
+            && context.volume.is_none();
+        let half_dt = 0.5 * dt;
+        let half = Context {
+            dt: half_dt,
+            inv_dt: 1.0 / half_dt,
+            linear_keep: (-parameters.linear_damping * half_dt).exp(),
+            angular_keep: (-parameters.angular_damping * half_dt).exp(),
+            ..context.clone()
+        };
+        let context = Context {
+            half: midpoint.then_some(&half),
+            ..context
         };
         let mut views = recycle(std::mem::take(&mut dispatch.views));
         split_strands(strands, active, &mut views);
@@ -539,6 +565,15 @@ fn split_strands<'a>(strands: &'a mut StrandSet, active: &[bool], views: &mut Ve
     }
 }
 
+/// The context strand's step runs its forces and solve in: the half
+/// step's for a midpoint step (`takes_midpoint`), else the step's.
+fn of_strand<'c, 'a>(ctx: &'c Context<'a>, midpoint: bool) -> &'c Context<'a> {
+    match ctx.half {
+        Some(half) if midpoint => half,
+        _ => ctx,
+    }
+}
+
 /// One strand's step. Returns false (and commits nothing) when its new
 /// state is not finite.
 fn step_strand(ctx: &Context<'_>, mut s: StrandMut<'_>, work: &mut Work) -> bool {
@@ -547,12 +582,16 @@ fn step_strand(ctx: &Context<'_>, mut s: StrandMut<'_>, work: &mut Work) -> bool
         return true;
     }
     let mut clock = PhaseClock::start(ctx.phase_clock);
-    predict(ctx, &s, work);
+    work.midpoint = takes_midpoint(ctx, &s);
+    predict(of_strand(ctx, work.midpoint), &s, work);
     clock.lap(&mut work.phases.forces);
     rest_shape(ctx, &s, work);
     clock.lap(&mut work.phases.bonds);
     if let Some(material) = ctx.physical {
-        work.solve_direct(ctx, material, &s);
+        work.solve_direct(of_strand(ctx, work.midpoint), material, &s);
+        if work.midpoint {
+            extrapolate(ctx, &s, work);
+        }
     } else {
         // (iv) Constraint iterations (and collisions).
         work.solves += u64::from(ctx.iterations);
@@ -593,7 +632,8 @@ fn step_group_direct<T: Real>(
     let mut clock = PhaseClock::start(ctx.phase_clock);
     let mut phases = PhaseTimes::default();
     for (s, work) in strands.iter().zip(works.iter_mut()) {
-        predict(ctx, s, work);
+        work.midpoint = takes_midpoint(ctx, s);
+        predict(of_strand(ctx, work.midpoint), s, work);
     }
     clock.lap(&mut phases.forces);
     if !rest_shapes_in_lanes(ctx, strands, works) {
@@ -611,7 +651,13 @@ fn step_group_direct<T: Real>(
     // (Inputs for the widest group; a narrower one reads its first.)
     let inputs: [DirectInput<'_>; WIDE] = std::array::from_fn(|lane| {
         let lane = lane % T::WIDTH;
-        direct_input(ctx, material, &strands[lane], &works[lane])
+        let work = &works[lane];
+        direct_input(
+            of_strand(ctx, work.midpoint),
+            material,
+            &strands[lane],
+            work,
+        )
     });
     direct.begin_lanes(ctx.instructions, &inputs[..T::WIDTH]);
     newton_iterations(ctx, works, direct, n);
@@ -625,7 +671,10 @@ fn step_group_direct<T: Real>(
         });
         direct.end(&mut out[..T::WIDTH]);
     }
-    for work in works.iter_mut().take(lanes) {
+    for (s, work) in strands.iter().zip(works.iter_mut()).take(lanes) {
+        if work.midpoint {
+            extrapolate(ctx, s, work);
+        }
         end_constraints(ctx, work, n, false);
     }
     clock.lap(&mut phases.constraints);
@@ -732,6 +781,7 @@ fn step_group(
     let mut clock = PhaseClock::start(ctx.phase_clock);
     let mut phases = PhaseTimes::default();
     for (s, work) in strands.iter().zip(works.iter_mut()) {
+        work.midpoint = false;
         predict(ctx, s, work);
         work.solves += u64::from(ctx.iterations);
     }
@@ -792,6 +842,10 @@ fn velocities(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
 #[inline(always)]
 fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
     let m = n - 1;
+    if work.midpoint {
+        // `extrapolate` found them.
+        return all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m]);
+    }
     // Follow-The-Leader's correction of the velocities (DFTL) is kept
     // apart: the real velocity is what the state reports.
     for i in 0..n {

@@ -36,6 +36,7 @@ pub(in crate::sim) struct StrandMut<'a> {
 }
 
 /// What every strand's step reads.
+#[derive(Clone)]
 pub(in crate::sim) struct Context<'a> {
     pub(in crate::sim) dt: f32,
     pub(in crate::sim) inv_dt: f32,
@@ -79,6 +80,9 @@ pub(in crate::sim) struct Context<'a> {
     pub(in crate::sim) physical: Option<RodMaterial>,
     /// Time the phases (`Solver::set_phase_clock`).
     pub(in crate::sim) phase_clock: bool,
+    /// The context of a midpoint step's half step (the same with half the
+    /// `dt`), when this step allows the midpoint step (rod/midpoint.rs).
+    pub(in crate::sim) half: Option<&'a Context<'a>>,
 }
 
 /// The clock of the phases of a strand's or a group's step, when the
@@ -159,9 +163,31 @@ pub(in crate::sim) struct Work {
     /// No bond rate of the strand changes this step (`rest_shape`): the
     /// bond update has nothing to do.
     pub(in crate::sim) bonds_unchanged: bool,
+    /// The strand takes the midpoint step this step (rod/midpoint.rs).
+    pub(in crate::sim) midpoint: bool,
+    /// The midpoint step's scratch: the half step's positions and
+    /// velocities, the extrapolated displacements and velocity changes.
+    pub(in crate::sim) mid: Vec<V3>,
+    pub(in crate::sim) v_mid: Vec<V3>,
+    pub(in crate::sim) ext_dx: Vec<V3>,
+    pub(in crate::sim) ext_dv: Vec<V3>,
+    pub(in crate::sim) smooth_scratch: Vec<V3>,
 }
 
 impl Work {
+    /// Room for the midpoint step's scratch of a strand of `n` vertices.
+    pub(in crate::sim) fn resize_midpoint(&mut self, n: usize) {
+        for v in [
+            &mut self.mid,
+            &mut self.v_mid,
+            &mut self.ext_dx,
+            &mut self.ext_dv,
+        ] {
+            v.resize(n, [0.0; 3]);
+        }
+        self.smooth_scratch.reserve(n);
+    }
+
     pub(in crate::sim) fn resize(&mut self, n: usize) {
         for v in [
             &mut self.x,

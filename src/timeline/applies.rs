@@ -15,8 +15,8 @@ fn written(span: &Range<usize>) -> bool {
 /// `[material]` and `[solver]` keys of one model only: `stiffness` and
 /// `quaternion_mass_scale` are the paper model's (the physical model bends
 /// by `youngs_modulus` and the fibre radius, and its frames have their
-/// segments' inertia); the moduli and the Newton `tolerance` are the
-/// physical model's.
+/// segments' inertia); the moduli, the Newton `tolerance` and the
+/// `integrator` are the physical model's.
 pub(super) fn check_material(timeline: &Timeline) -> Result<(), TimelineError> {
     let m = &timeline.file.material;
     let model = *m.model.get_ref();
@@ -62,6 +62,14 @@ pub(super) fn check_material(timeline: &Timeline) -> Result<(), TimelineError> {
                     "tolerance",
                     "physical",
                     ": the paper model runs `iterations` Gauss-Seidel sweeps",
+                );
+            }
+            if let Some(integrator) = &s.integrator {
+                return refuse(
+                    integrator.span(),
+                    "integrator",
+                    "physical",
+                    ": the paper model's step is the paper's",
                 );
             }
             for (key, span) in physical {

@@ -65,6 +65,10 @@ pub fn parameters_of(timeline: &Timeline) -> SolverParameters {
             (None, None) => model.default_tolerance(),
         },
         gravity: s.gravity,
+        integrator: s
+            .integrator
+            .as_ref()
+            .map_or_else(Default::default, |i| *i.get_ref()),
         hair_radius: *s.hair_radius.get_ref(),
         hair_hair_strength: s
             .hair_hair

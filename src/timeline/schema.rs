@@ -280,6 +280,9 @@ pub struct SolverSpec {
     /// when `iterations` is not set either, else 0 (every strand gets
     /// exactly `iterations`).
     pub tolerance: Option<Spanned<f32>>,
+    /// The physical model's time integrator (`SolverParameters::integrator`);
+    /// `None`: backward Euler.
+    pub integrator: Option<Spanned<crate::sim::Integrator>>,
     /// Acceleration of gravity, m/s^2 (Y up).
     pub gravity: [f32; 3],
     /// Hair radius, metres (collision margin and hair-hair distance).
@@ -299,6 +302,7 @@ impl Default for SolverSpec {
             dt: Spanned::new(0..0, TimeStep::Seconds(1.0 / 360.0)),
             iterations: None,
             tolerance: None,
+            integrator: None,
             gravity: [0.0, -9.8, 0.0],
             hair_radius: Spanned::new(0..0, 4.0e-5),
             hair_hair: None,

@@ -169,3 +169,49 @@ fn rod_radius_outside_the_documented_range_is_refused() {
         }
     }
 }
+
+/// `[solver] integrator` (issue 35): `midpoint` or `backward_euler` on the
+/// physical model, a different bake; any other value, or the key on the
+/// paper model, refused by `validate` naming it.
+#[test]
+fn the_integrator_is_chosen_checked_and_refused_where_it_does_not_apply() {
+    let dir = TestDir::new();
+    groom_with_width(&dir, "0.00008");
+    let timeline = |model: &str, integrator: &str, out: &str| {
+        format!(
+            "[groom]\nsource = \"g.usda\"\n[material]\nmodel = \"{model}\"\n[solver]\n{integrator}\n\
+             [[stage]]\nkind = \"settle\"\nduration = 0.1\n[[export]]\npath = \"{out}\"\nwhat = \"final\"\n"
+        )
+    };
+    let mut finals = Vec::new();
+    for (integrator, out) in [
+        ("integrator = \"backward_euler\"", "be.usda"),
+        ("integrator = \"midpoint\"", "mid.usda"),
+    ] {
+        std::fs::write(dir.path("t.toml"), timeline("physical", integrator, out)).unwrap();
+        dir.run_ok(&["validate", "t.toml"]);
+        dir.run_ok(&["bake", "t.toml", "--out", "o", "-q"]);
+        finals.push(std::fs::read(dir.path("o").join(out)).unwrap());
+    }
+    assert_ne!(finals[0], finals[1], "the integrator changed nothing");
+    std::fs::write(
+        dir.path("t.toml"),
+        timeline("physical", "integrator = \"rk4\"", "x.usda"),
+    )
+    .unwrap();
+    let stderr = dir.run_fail(&["validate", "t.toml"], 2);
+    assert!(
+        stderr.contains("t.toml") && stderr.contains("rk4"),
+        "{stderr}"
+    );
+    std::fs::write(
+        dir.path("t.toml"),
+        timeline("paper", "integrator = \"midpoint\"", "x.usda"),
+    )
+    .unwrap();
+    let stderr = dir.run_fail(&["validate", "t.toml"], 2);
+    assert!(
+        stderr.contains("`integrator` does not apply to the paper model"),
+        "{stderr}"
+    );
+}

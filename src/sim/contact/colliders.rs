@@ -247,6 +247,19 @@ pub(crate) fn project(
     project_contact(colliders, p, start, radius, dt).position
 }
 
+/// Whether the box `[min, max]` overlaps any collider's box (this step's,
+/// grown by the hair radius and by the collider's motion over `dt`): a
+/// strand far from every collider takes the midpoint step
+/// (rod/midpoint.rs).
+pub(crate) fn boxes_overlap(colliders: &[PreparedCollider<'_>], min: V3, max: V3, dt: f32) -> bool {
+    colliders.iter().any(|c| {
+        let size = length(sub(c.max, c.min));
+        let speed = length(c.collider.linear_velocity) + length(c.collider.angular_velocity) * size;
+        let reach = speed * dt;
+        (0..3).all(|i| min[i] <= c.max[i] + reach && max[i] >= c.min[i] - reach)
+    })
+}
+
 /// What a projection found at one vertex.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Contact {

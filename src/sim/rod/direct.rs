@@ -38,7 +38,9 @@ use algebra::{
     qmul, rotation_matrix, tangent,
 };
 use constants::EdgeLane;
-pub(in crate::sim) use constants::{edge_flexibility, segment_mass};
+pub(in crate::sim) use constants::{
+    edge_flexibility, segment_mass, FRAME_INERTIA_SPEED, MIDPOINT_FRAME_INERTIA_SPEED,
+};
 
 /// The largest frame rotation one iteration applies, radians: a trust
 /// region for the linearisation, so a frame whose target jumps (a perm
@@ -126,6 +128,10 @@ pub struct DirectInput<'a> {
     /// The fixed frame the first edge is clamped to (the scalp's).
     pub root_frame: Quat,
     pub dt: f32,
+    /// The frames' tilt inertia is at least that of a segment this speed
+    /// times `dt` long, m/s (`FRAME_INERTIA_SPEED` for backward Euler,
+    /// `MIDPOINT_FRAME_INERTIA_SPEED` for the midpoint step's half step).
+    pub frame_inertia_speed: f64,
 }
 
 /// The constants of block `k` for a step.

@@ -5,7 +5,9 @@
 //! inextensibility pass and the final collision pass.
 
 use super::constraints::{bend_twist, follow_the_leader, stretch_shear};
-use super::direct::{Direct, DirectInput, RodMaterial};
+use super::direct::{
+    Direct, DirectInput, RodMaterial, FRAME_INERTIA_SPEED, MIDPOINT_FRAME_INERTIA_SPEED,
+};
 use super::real::{Real, WIDE};
 use crate::sim::contact::colliders::project;
 use crate::sim::contact::hair_friction;
@@ -139,6 +141,11 @@ pub(in crate::sim) fn direct_input<'a>(
         rest: &work.rest[..m],
         root_frame: work.root_frame,
         dt: ctx.dt,
+        frame_inertia_speed: if work.midpoint {
+            MIDPOINT_FRAME_INERTIA_SPEED
+        } else {
+            FRAME_INERTIA_SPEED
+        },
     }
 }
 

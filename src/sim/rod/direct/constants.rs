@@ -21,7 +21,17 @@ use crate::sim::rod::real::Real;
 /// carry no load) and at dt 1/1000 (the frequency test) only edges under
 /// 6 mm get heavier frames: the 5 cm cantilever's first mode moves by
 /// `(k L)^2 / 24`, about 0.1 %.
-const FRAME_INERTIA_SPEED: f64 = 6.0;
+pub(in crate::sim) const FRAME_INERTIA_SPEED: f64 = 6.0;
+
+/// The floor of the midpoint step's half step (rod/midpoint.rs), m/s of
+/// the half step's `dt`: 1.5 m/s of the whole step's. The floor's
+/// numerical rotary inertia lowers the frequencies at a long `dt`: the
+/// released 5 cm hair (16 edges) swung at 7.01 Hz at dt 1/120 with 6 m/s
+/// of the half step's `dt`, 7.25 Hz with 3 (7.35 Hz asked, 2 % allowed).
+/// The blow-ups the larger floor prevents came from strands held at both
+/// ends and from fine edges, which take backward Euler's step
+/// (`takes_midpoint`).
+pub(in crate::sim) const MIDPOINT_FRAME_INERTIA_SPEED: f64 = 3.0;
 
 /// The mass of an edge, kg: a cylinder of the mean radius of its ends.
 #[inline(always)]
@@ -94,7 +104,7 @@ impl<T: Real> Direct<T> {
         let youngs: T = gather(strands, |s| s.material.youngs_modulus);
         let shear: T = gather(strands, |s| s.material.shear_modulus);
         let density: T = gather(strands, |s| s.material.density);
-        let arm_floor: T = gather(strands, |s| FRAME_INERTIA_SPEED * s.dt as f64);
+        let arm_floor: T = gather(strands, |s| s.frame_inertia_speed * s.dt as f64);
         // Per vertex, its radius, its joint's cuticle factor and whether
         // it is free, and per edge its length, each read once, strand by
         // strand (as `begin`).
