@@ -38,7 +38,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
 
 /// Reads a crate file from bytes in memory the way [`crate::stream`] reads
 /// one from disk: its topology, then each frame alone, in turn. `None`
-/// when such a file is read whole (see [`stream`]). For tests and fuzzing
+/// when such a file is read whole (see [`crate::stream::FrameStream::open_usd_crate`]). For tests and fuzzing
 /// of the frame-at-a-time path; `path` names the bytes in errors.
 pub fn read_streamed_bytes(path: &Path, bytes: &[u8]) -> Result<Option<Groom>, ImportError> {
     let Some(opened) = stream::UsdStream::open(path, bytes)? else {
