@@ -352,6 +352,46 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// A GLB frame reads only the targets it weights: a value that is not
+    /// finite in the target of frame 2 (the exporter writes one target per
+    /// frame, switched fully on at its frame) leaves opening and frames 0
+    /// and 1 as the whole read would have them, and frame 2 fails with the
+    /// whole read's message.
+    #[test]
+    fn a_bad_glb_target_fails_the_frame_that_weights_it_as_the_whole_read_fails() {
+        let dir = std::env::temp_dir().join(format!("groombake-glb-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("anim.glb");
+        let groom = animated_groom(3);
+        exporters::write(&path, &groom).unwrap();
+        let good = crate::read(&path).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        // GLB: 12-byte header, the JSON chunk (8-byte header), the BIN chunk.
+        let json_length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_length]).unwrap();
+        let bin = 20 + json_length + 8;
+        let accessor = json["meshes"][0]["primitives"][0]["targets"][2]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        let accessor = &json["accessors"][accessor];
+        let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+        let at = bin
+            + view["byteOffset"].as_u64().unwrap_or(0) as usize
+            + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+        bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+
+        let whole = crate::read(&path).unwrap_err().to_string();
+        assert!(whole.contains("is not finite"), "{whole}");
+        let mut stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Gltf(..)));
+        assert_eq!(stream.frame_count(), 3);
+        assert_eq!(stream.frame(0).unwrap(), good.frames[0]);
+        assert_eq!(stream.frame(1).unwrap(), good.frames[1]);
+        assert_eq!(stream.frame(2).unwrap_err().to_string(), whole);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// Text USD and a crate file without frames are read whole, as before.
     #[test]
     fn usda_and_still_crate_files_read_whole() {
