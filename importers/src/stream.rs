@@ -4,15 +4,17 @@
 //! every frame in turn (`inspect`) or at a few (`preview`) holds one frame
 //! plus the topology, however large the file.
 //!
-//! Alembic and USD crate files (`.usdc`, and `.usd` holding a crate) are
-//! read this way from a memory map whose pages are released after each
+//! Alembic, USD crate files (`.usdc`, and `.usd` holding a crate) and GLB
+//! are read this way from a memory map whose pages are released after each
 //! frame (`crate::mapped`); a crate layer that composes other layers, or
-//! whose topology changes over time, is read whole (`crate::usd::stream`).
-//! The other formats are read whole and their frames handed out one by one
-//! (`.usda` is text parsed whole; glTF's accessors decode every sample on
-//! reading; streaming glTF is to do).
+//! whose topology changes over time, is read whole (`crate::usd::stream`),
+//! as is a GLB whose buffers are not all its BIN chunk
+//! (`crate::gltf::stream`). The other formats are read whole and their
+//! frames handed out one by one (`.usda` is text parsed whole; a `.gltf`
+//! holds its buffers in base64 or in other files).
 
 use crate::abc::{archive::Archive, ogawa::Fault, scene};
+use crate::gltf::{self, GltfStream};
 use crate::mapped::Mapped;
 use crate::usd::stream::{Opened, UsdStream};
 use crate::{extension_of, ImportError};
@@ -33,6 +35,8 @@ enum Source {
     Abc(Mapped),
     /// A USD crate file, each frame decoded from the map when asked for.
     Usd(Mapped, Box<UsdStream>),
+    /// A GLB, each frame's morph targets read from the map when asked for.
+    Gltf(Mapped, GltfStream),
     /// A file read whole: its frames, handed out by copy.
     Whole(Vec<Frame>),
 }
@@ -42,6 +46,9 @@ impl FrameStream {
     /// its topology and frame times.
     pub fn open(path: &Path) -> Result<FrameStream, ImportError> {
         if let Some(stream) = FrameStream::open_usd_crate(path)? {
+            return Ok(stream);
+        }
+        if let Some(stream) = FrameStream::open_glb(path)? {
             return Ok(stream);
         }
         if extension_of(path) != "abc" {
@@ -103,6 +110,38 @@ impl FrameStream {
         }))
     }
 
+    /// A glTF file (`.glb`, `.gltf`) opened to stream from its memory map;
+    /// `None` when it is not a GLB with all its buffers in its BIN chunk,
+    /// or holds no animated strands (`crate::gltf::stream`): then it is read
+    /// whole.
+    fn open_glb(path: &Path) -> Result<Option<FrameStream>, ImportError> {
+        if !matches!(extension_of(path).as_str(), "glb" | "gltf") {
+            return Ok(None);
+        }
+        let mut mapped = Mapped::open(path)?;
+        let opened = GltfStream::open(path, mapped.bytes())?;
+        mapped.release();
+        let Some(gltf::Opened {
+            stream,
+            mut groom,
+            times,
+        }) = opened
+        else {
+            return Ok(None);
+        };
+        // As `crate::read` finishes a glTF groom.
+        groom.provenance.source = Some(path.to_path_buf());
+        if groom.provenance.units_source.is_empty() {
+            groom.provenance.units_source = "file".into();
+        }
+        Ok(Some(FrameStream {
+            path: path.to_path_buf(),
+            groom,
+            times,
+            source: Source::Gltf(mapped, stream),
+        }))
+    }
+
     /// The topology, rest points and attributes (no frames).
     pub fn groom(&self) -> &Groom {
         &self.groom
@@ -129,6 +168,11 @@ impl FrameStream {
         };
         match &mut self.source {
             Source::Whole(frames) => frames.get(index).cloned().ok_or_else(missing),
+            Source::Gltf(mapped, stream) => {
+                let frame = stream.frame(&self.path, mapped.bytes(), index);
+                mapped.release();
+                frame
+            }
             Source::Usd(mapped, stream) => {
                 let frame = stream.frame(&self.path, mapped.bytes(), index);
                 mapped.release();
@@ -260,6 +304,91 @@ mod tests {
             let error = stream.frame(7).unwrap_err().to_string();
             assert!(error.contains("no frame 7: the file has 7"), "{error}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A GLB streams: each frame read alone equals the whole read's, in
+    /// any order; the topology, rest, attributes and losses equal the whole
+    /// read's without frames. A `.gltf` (base64 buffer) is read whole.
+    #[test]
+    fn glb_frames_read_one_at_a_time_equal_the_whole_read() {
+        let dir = std::env::temp_dir().join(format!("groombake-glb-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("anim.glb");
+        exporters::write(&path, &animated_groom(7)).unwrap();
+        let whole = crate::read(&path).unwrap();
+        assert_eq!(whole.frames.len(), 7);
+        let mut stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Gltf(..)), "read whole");
+        let mut rest = whole.clone();
+        rest.frames.clear();
+        assert_eq!(stream.groom(), &rest);
+        assert_eq!(
+            stream.times(),
+            whole.frames.iter().map(|f| f.time).collect::<Vec<_>>()
+        );
+        for index in [6, 0, 3, 1, 2, 5, 4] {
+            assert_eq!(
+                &stream.frame(index).unwrap(),
+                &whole.frames[index],
+                "frame {index}"
+            );
+        }
+        let error = stream.frame(7).unwrap_err().to_string();
+        assert!(error.contains("no frame 7: the file has 7"), "{error}");
+        assert_eq!(
+            crate::gltf::read_streamed_bytes(&path, &std::fs::read(&path).unwrap())
+                .unwrap()
+                .unwrap()
+                .frames,
+            whole.frames
+        );
+
+        let path = dir.join("anim.gltf");
+        exporters::write(&path, &animated_groom(3)).unwrap();
+        let stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Whole(_)));
+        assert_eq!(stream.frame_count(), 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A GLB frame reads only the targets it weights: a value that is not
+    /// finite in the target of frame 2 (the exporter writes one target per
+    /// frame, switched fully on at its frame) leaves opening and frames 0
+    /// and 1 as the whole read would have them, and frame 2 fails with the
+    /// whole read's message.
+    #[test]
+    fn a_bad_glb_target_fails_the_frame_that_weights_it_as_the_whole_read_fails() {
+        let dir = std::env::temp_dir().join(format!("groombake-glb-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("anim.glb");
+        let groom = animated_groom(3);
+        exporters::write(&path, &groom).unwrap();
+        let good = crate::read(&path).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        // GLB: 12-byte header, the JSON chunk (8-byte header), the BIN chunk.
+        let json_length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_length]).unwrap();
+        let bin = 20 + json_length + 8;
+        let accessor = json["meshes"][0]["primitives"][0]["targets"][2]["POSITION"]
+            .as_u64()
+            .unwrap() as usize;
+        let accessor = &json["accessors"][accessor];
+        let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+        let at = bin
+            + view["byteOffset"].as_u64().unwrap_or(0) as usize
+            + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+        bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        std::fs::write(&path, &bytes).unwrap();
+
+        let whole = crate::read(&path).unwrap_err().to_string();
+        assert!(whole.contains("is not finite"), "{whole}");
+        let mut stream = FrameStream::open(&path).unwrap();
+        assert!(matches!(stream.source, Source::Gltf(..)));
+        assert_eq!(stream.frame_count(), 3);
+        assert_eq!(stream.frame(0).unwrap(), good.frames[0]);
+        assert_eq!(stream.frame(1).unwrap(), good.frames[1]);
+        assert_eq!(stream.frame(2).unwrap_err().to_string(), whole);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -165,6 +165,9 @@ fn formats(dir: &Path) -> Vec<Format> {
             ],
             vec![
                 ("gltf::parse", |p, b| ok(importers::gltf::parse(p, b))),
+                ("gltf::read_streamed_bytes", |p, b| {
+                    ok(importers::gltf::read_streamed_bytes(p, b))
+                }),
                 ("gltf::parse_triangles", |p, b| {
                     ok(importers::gltf::parse_triangles(p, b))
                 }),

@@ -56,6 +56,26 @@ impl Document<'_> {
     /// The bytes of each element of an accessor, after checking the whole
     /// range lies inside its buffer view and buffer.
     fn elements<'b>(&'b self, accessor: &Accessor) -> Result<Vec<&'b [u8]>, ImportError> {
+        let (data, start, stride) = self.element_range(accessor)?;
+        let element_size = accessor.element_size();
+        let count = accessor.count();
+        // Decoded elements take at least a pointer each.
+        let per_element = element_size.max(std::mem::size_of::<&[u8]>()) as u64;
+        self.charge(count.saturating_mul(per_element), || accessor.place())?;
+        // `element_range` checked both bounds lie within the buffer.
+        let count = count as usize;
+        Ok((0..count)
+            .map(|k| &data[start + k * stride..start + k * stride + element_size])
+            .collect())
+    }
+
+    /// The buffer, start offset and stride of an accessor's elements, after
+    /// checking the whole range lies inside its buffer view and buffer;
+    /// reads none of the elements.
+    fn element_range<'b>(
+        &'b self,
+        accessor: &Accessor,
+    ) -> Result<(&'b [u8], usize, usize), ImportError> {
         let place = accessor.place();
         if accessor.json.sparse.is_some() {
             return Err(self.error(place, "sparse accessors are not supported"));
@@ -93,14 +113,8 @@ impl Document<'_> {
             (Some(start), Some(end), Some(view_end))
                 if end <= view_end && end <= data.len() as u64 =>
             {
-                // Decoded elements take at least a pointer each.
-                let per_element = element_size.max(std::mem::size_of::<&[u8]>()) as u64;
-                self.charge(count.saturating_mul(per_element), || place.clone())?;
                 // Both bounds are within the buffer, so they fit in usize.
-                let (start, count) = (start as usize, count as usize);
-                Ok((0..count)
-                    .map(|k| &data[start + k * stride..start + k * stride + element_size])
-                    .collect())
+                Ok((data, start as usize, stride))
             }
             _ => Err(self.error(
                 place,
@@ -114,15 +128,7 @@ impl Document<'_> {
 
     pub fn floats(&self, accessor: &Accessor, kind: Type) -> Result<Vec<f32>, ImportError> {
         let place = accessor.place();
-        if accessor.component != ComponentType::F32 || accessor.kind != kind {
-            return Err(self.error(
-                place,
-                format!(
-                    "expected {kind:?} of FLOAT, found {:?} of {:?}",
-                    accessor.kind, accessor.component
-                ),
-            ));
-        }
+        self.float_type(accessor, kind)?;
         let elements = self.elements(accessor)?;
         let mut values = Vec::with_capacity(elements.len() * kind.multiplicity());
         for element in elements {
@@ -135,6 +141,28 @@ impl Document<'_> {
             }
         }
         Ok(values)
+    }
+
+    /// What [`Document::floats`] checks before decoding (the type and that
+    /// the elements lie in their buffer), without reading the values: a
+    /// value that is not finite, or a reference past the decode budget, is
+    /// found only when the accessor is decoded.
+    pub fn check_floats(&self, accessor: &Accessor, kind: Type) -> Result<(), ImportError> {
+        self.float_type(accessor, kind)?;
+        self.element_range(accessor).map(|_| ())
+    }
+
+    fn float_type(&self, accessor: &Accessor, kind: Type) -> Result<(), ImportError> {
+        if accessor.component != ComponentType::F32 || accessor.kind != kind {
+            return Err(self.error(
+                accessor.place(),
+                format!(
+                    "expected {kind:?} of FLOAT, found {:?} of {:?}",
+                    accessor.kind, accessor.component
+                ),
+            ));
+        }
+        Ok(())
     }
 
     pub fn vec3(&self, accessor: &Accessor) -> Result<Vec<[f32; 3]>, ImportError> {

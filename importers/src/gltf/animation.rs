@@ -2,7 +2,7 @@
 //! targets weighted by the k-th keyframe of the `weights` sampler.
 
 use super::document::Document;
-use super::lines::Lines;
+use super::lines::{Lines, Target};
 use super::scene::{transform, Matrix};
 use crate::ImportError;
 use gltf::json;
@@ -32,9 +32,43 @@ pub(super) fn drives_weights(channel: &json::animation::Channel) -> bool {
     )
 }
 
+/// The keyframes of the first animation that drives morph-target weights.
+pub(super) struct Keyframes {
+    pub animation: usize,
+    /// Seconds.
+    pub times: Vec<f32>,
+    /// Per node: the weights of each keyframe.
+    pub weights_of_node: BTreeMap<usize, Vec<Vec<f32>>>,
+}
+
+impl Keyframes {
+    /// The weights of `piece`'s targets at keyframe `k`: its node's, else
+    /// its mesh's defaults.
+    pub fn weights<'w>(&'w self, k: usize, piece: &Piece, lines: &'w Lines) -> &'w [f32] {
+        self.weights_of_node
+            .get(&piece.node)
+            .and_then(|keys| keys.get(k))
+            .map(Vec::as_slice)
+            .unwrap_or(&lines.default_weights)
+    }
+}
+
 impl Document<'_> {
     /// Frames from the first animation that drives morph-target weights.
     pub fn frames(&self, decoded: &[Lines], pieces: &[Piece]) -> Result<Vec<Frame>, ImportError> {
+        let Some(keyframes) = self.keyframes()? else {
+            return Ok(Vec::new());
+        };
+        self.check_frames(&keyframes, decoded, pieces)?;
+        (0..keyframes.times.len())
+            .map(|k| self.frame(&keyframes, k, decoded, pieces))
+            .collect()
+    }
+
+    /// The times and weights of the first animation that drives
+    /// morph-target weights (read from the JSON and the sampler
+    /// accessors, not the targets); `None` when none does.
+    pub fn keyframes(&self) -> Result<Option<Keyframes>, ImportError> {
         let Some((animation_index, animation)) = self
             .root
             .animations
@@ -42,7 +76,7 @@ impl Document<'_> {
             .enumerate()
             .find(|(_, a)| a.channels.iter().any(drives_weights))
         else {
-            return Ok(Vec::new());
+            return Ok(None);
         };
         let mut times: Option<Vec<f32>> = None;
         // Per node: the weights of each keyframe.
@@ -112,7 +146,21 @@ impl Document<'_> {
                 .collect();
             weights_of_node.insert(node_index, keys);
         }
-        let times = times.unwrap_or_default();
+        Ok(Some(Keyframes {
+            animation: animation_index,
+            times: times.unwrap_or_default(),
+            weights_of_node,
+        }))
+    }
+
+    /// Refuses keyframes whose frames would be too many points to hold.
+    pub fn check_frames(
+        &self,
+        keyframes: &Keyframes,
+        decoded: &[Lines],
+        pieces: &[Piece],
+    ) -> Result<(), ImportError> {
+        let (animation_index, times) = (keyframes.animation, &keyframes.times);
         let vertices: usize = pieces.iter().map(|p| decoded[p.lines].point_count()).sum();
         // Few morph targets can drive many keyframes: bound what the frames
         // would take, by a fixed limit and by the bytes the file has, before
@@ -130,43 +178,55 @@ impl Document<'_> {
                 ),
             ));
         }
-        let mut frames = Vec::with_capacity(times.len());
-        for (k, &time) in times.iter().enumerate() {
-            let mut points = Vec::with_capacity(vertices);
-            for piece in pieces {
-                let lines = &decoded[piece.lines];
-                let weights: &[f32] = weights_of_node
-                    .get(&piece.node)
-                    .and_then(|keys| keys.get(k))
-                    .map(Vec::as_slice)
-                    .unwrap_or(&lines.default_weights);
-                for &i in lines.strands.iter().flatten() {
-                    let mut p = lines.positions.get(i).copied().unwrap_or_default();
-                    for (target, &w) in lines.targets.iter().zip(weights) {
-                        let Some(d) = target.as_ref().and_then(|t| t.get(i)) else {
-                            continue;
-                        };
-                        if w != 0.0 {
-                            for c in 0..3 {
-                                p[c] += w * d[c];
-                            }
+        Ok(())
+    }
+
+    /// Frame `k`: the base pose plus the targets weighted by keyframe `k`,
+    /// of every piece in world coordinates. The targets with a nonzero
+    /// weight must have been read (a [`super::lines::Target::Deferred`]
+    /// one moves nothing).
+    pub fn frame(
+        &self,
+        keyframes: &Keyframes,
+        k: usize,
+        decoded: &[Lines],
+        pieces: &[Piece],
+    ) -> Result<Frame, ImportError> {
+        let animation_index = keyframes.animation;
+        let time = keyframes.times.get(k).copied().unwrap_or_default();
+        let vertices: usize = pieces.iter().map(|p| decoded[p.lines].point_count()).sum();
+        let mut points = Vec::with_capacity(vertices);
+        for piece in pieces {
+            let lines = &decoded[piece.lines];
+            let weights = keyframes.weights(k, piece, lines);
+            for &i in lines.strands.iter().flatten() {
+                let mut p = lines.positions.get(i).copied().unwrap_or_default();
+                for (target, &w) in lines.targets.iter().zip(weights) {
+                    let Target::Deltas(deltas) = target else {
+                        continue;
+                    };
+                    let Some(d) = deltas.get(i) else {
+                        continue;
+                    };
+                    if w != 0.0 {
+                        for c in 0..3 {
+                            p[c] += w * d[c];
                         }
                     }
-                    points.push(transform(&piece.world, p));
                 }
+                points.push(transform(&piece.world, p));
             }
-            if points.iter().flatten().any(|c| !c.is_finite()) {
-                return Err(self.error(
-                    format!("/animations/{animation_index}"),
-                    format!("keyframe {k} moves a point to a value that is not finite"),
-                ));
-            }
-            frames.push(Frame {
-                time: time as f64,
-                points,
-                attributes: Vec::new(),
-            });
         }
-        Ok(frames)
+        if points.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(self.error(
+                format!("/animations/{animation_index}"),
+                format!("keyframe {k} moves a point to a value that is not finite"),
+            ));
+        }
+        Ok(Frame {
+            time: time as f64,
+            points,
+            attributes: Vec::new(),
+        })
     }
 }

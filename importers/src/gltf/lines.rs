@@ -1,6 +1,8 @@
 //! Line primitives into strands: `LINE_STRIP` primitives are one strand
 //! each, `LINES` primitives join consecutive segments that share an end
 //! vertex; their `_NAME` attributes and `TEXCOORD_0` become attributes.
+//! Their morph targets are read, or for a stream only checked and read
+//! later, target by target, as frames need them.
 
 use super::accessors::Accessor;
 use super::document::Document;
@@ -24,10 +26,29 @@ pub(super) struct Lines {
     pub attributes: BTreeMap<String, AttributeValues>,
     /// Attributes marked per strand whose values agree along every strand.
     pub per_strand: BTreeSet<String>,
-    /// Position deltas of each morph target; `None` for a target that
-    /// moves nothing.
-    pub targets: Vec<Option<Vec<[f32; 3]>>>,
+    /// The morph targets, in order.
+    pub targets: Vec<Target>,
     pub default_weights: Vec<f32>,
+}
+
+/// A morph target of a line primitive.
+pub(super) enum Target {
+    /// A target without POSITION: it moves nothing.
+    Still,
+    /// Its position deltas, one per vertex.
+    Deltas(Vec<[f32; 3]>),
+    /// Checked (type, count, range) but not read yet: its POSITION
+    /// accessor, and that reference's JSON pointer for errors.
+    Deferred(json::Index<json::Accessor>, String),
+}
+
+/// Whether [`Document::lines`] reads the morph targets' deltas or only
+/// checks them ([`Target::Deferred`]) for a stream to read the ones a
+/// frame needs ([`Document::read_target`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Targets {
+    Read,
+    Check,
 }
 
 impl Lines {
@@ -46,6 +67,7 @@ impl Document<'_> {
         mesh: &json::Mesh,
         primitive_index: usize,
         primitive: &json::mesh::Primitive,
+        targets_wanted: Targets,
     ) -> Result<Option<Lines>, ImportError> {
         let place = format!("/meshes/{mesh_index}/primitives/{primitive_index}");
         let mode = self.valid(&primitive.mode, "primitive mode", || {
@@ -133,18 +155,19 @@ impl Document<'_> {
         let mut targets = Vec::new();
         for (k, target) in primitive.targets.iter().flatten().enumerate() {
             let Some(index) = target.positions else {
-                targets.push(None);
+                targets.push(Target::Still);
                 continue;
             };
-            let accessor = self.accessor(index, || format!("{place}/targets/{k}/POSITION"))?;
-            let deltas = self.vec3(&accessor)?;
-            if deltas.len() != vertex_count {
-                return Err(self.error(
-                    format!("{place}/targets/{k}"),
-                    "morph target POSITION count differs from the base",
-                ));
-            }
-            targets.push(Some(deltas));
+            let from = format!("{place}/targets/{k}/POSITION");
+            targets.push(match targets_wanted {
+                Targets::Read => Target::Deltas(self.target_deltas(index, &from, vertex_count)?),
+                Targets::Check => {
+                    let accessor = self.accessor(index, || from.clone())?;
+                    self.check_floats(&accessor, json::accessor::Type::Vec3)?;
+                    self.check_target_count(accessor.count(), vertex_count, &from)?;
+                    Target::Deferred(index, from)
+                }
+            });
         }
         Ok(Some(Lines {
             strands,
@@ -154,6 +177,44 @@ impl Document<'_> {
             targets,
             default_weights: mesh.weights.clone().unwrap_or_default(),
         }))
+    }
+
+    /// Reads target `k` of `lines` if it is [`Target::Deferred`].
+    pub fn read_target(&self, lines: &mut Lines, k: usize) -> Result<(), ImportError> {
+        let vertex_count = lines.positions.len();
+        if let Some(target) = lines.targets.get_mut(k) {
+            if let Target::Deferred(index, from) = target {
+                *target = Target::Deltas(self.target_deltas(*index, from, vertex_count)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// The deltas of the morph target POSITION accessor `index`, referenced
+    /// from `from`, which must have one per vertex.
+    fn target_deltas(
+        &self,
+        index: json::Index<json::Accessor>,
+        from: &str,
+        vertex_count: usize,
+    ) -> Result<Vec<[f32; 3]>, ImportError> {
+        let accessor = self.accessor(index, || from.to_string())?;
+        let deltas = self.vec3(&accessor)?;
+        self.check_target_count(deltas.len() as u64, vertex_count, from)?;
+        Ok(deltas)
+    }
+
+    fn check_target_count(
+        &self,
+        count: u64,
+        vertex_count: usize,
+        from: &str,
+    ) -> Result<(), ImportError> {
+        if count != vertex_count as u64 {
+            let place = from.strip_suffix("/POSITION").unwrap_or(from);
+            return Err(self.error(place, "morph target POSITION count differs from the base"));
+        }
+        Ok(())
     }
 
     /// The vertex indices of a primitive, each checked against the vertex

@@ -20,7 +20,10 @@
 //! and enum is checked where it is used (the `gltf` crate's loader panics on
 //! some bad ones), `accessors` reads accessor data checked against the
 //! buffers, `scene` walks the node graph, `lines` and `triangles`
-//! decode primitives, `animation` makes frames.
+//! decode primitives, `animation` makes frames, and `stream` reads a
+//! `.glb` a frame at a time for [`crate::stream`], reading only the morph
+//! targets each frame weights ([`read_streamed_bytes`] reads that way from
+//! memory).
 
 mod accessors;
 mod animation;
@@ -28,9 +31,12 @@ mod document;
 mod lines;
 mod losses;
 mod scene;
+mod stream;
 #[cfg(test)]
 mod tests;
 mod triangles;
+
+pub(crate) use stream::{GltfStream, Opened};
 
 use crate::mesh_types::{Mesh, Triangles};
 use crate::ImportError;
@@ -38,7 +44,7 @@ use animation::Piece;
 use document::Document;
 use gltf::json::validation::Checked;
 use groom::{Attribute, AttributeValues, Groom, Units, UpAxis};
-use lines::Lines;
+use lines::{Lines, Targets};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use triangles::{TrianglePrimitive, MAX_MESH_TRIANGLES, MAX_MESH_VERTICES};
@@ -53,13 +59,57 @@ pub fn read(path: &Path) -> Result<Groom, ImportError> {
 
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
     let document = Document::load(path, bytes)?;
-    let (decoded, pieces, skipped) = line_pieces(&document)?;
+    let (decoded, pieces, skipped) = line_pieces(&document, Targets::Read)?;
+    let mut groom = rest_groom(&document, &decoded, &pieces)?;
+    groom.frames = document.frames(&decoded, &pieces)?;
+    add_losses(&mut groom, &document, &pieces, &skipped);
+    Ok(groom)
+}
+
+/// Reads a `.glb` from bytes in memory the way [`crate::stream`] reads one
+/// from disk: its rest groom and frame times, then each frame alone, in
+/// turn, reading only the morph targets it weights. `None` when such a
+/// file is read whole (see [`crate::stream::FrameStream::open`]). For tests
+/// and fuzzing of the frame-at-a-time path; `path` names the bytes in
+/// errors.
+pub fn read_streamed_bytes(path: &Path, bytes: &[u8]) -> Result<Option<Groom>, ImportError> {
+    let Some(opened) = stream::GltfStream::open(path, bytes)? else {
+        return Ok(None);
+    };
+    let mut groom = opened.groom;
+    for index in 0..opened.times.len() {
+        groom.frames.push(opened.stream.frame(path, bytes, index)?);
+    }
+    Ok(Some(groom))
+}
+
+/// The skipped primitives and unread animation channels, as losses.
+fn add_losses(
+    groom: &mut Groom,
+    document: &Document,
+    pieces: &[Piece],
+    skipped: &[losses::Skipped],
+) {
+    groom.provenance.losses.extend(
+        losses::skipped_primitives(skipped)
+            .into_iter()
+            .chain(document.unread_channels(pieces)),
+    );
+}
+
+/// The groom of the scene's line pieces without frames or losses: points
+/// in world coordinates, strand counts and attributes.
+fn rest_groom(
+    document: &Document,
+    decoded: &[Lines],
+    pieces: &[Piece],
+) -> Result<Groom, ImportError> {
     let mut groom = Groom {
         units: Units::METERS,
         up_axis: UpAxis::Y,
         ..Groom::default()
     };
-    let common = common_attributes(&decoded, &pieces);
+    let common = common_attributes(decoded, pieces);
     let per_strand: BTreeSet<String> = common
         .keys()
         .filter(|name| {
@@ -70,7 +120,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
         .cloned()
         .collect();
     let mut attributes = common;
-    for piece in &pieces {
+    for piece in pieces {
         let lines = &decoded[piece.lines];
         for strand in &lines.strands {
             groom.strand_vertex_counts.push(strand.len() as u32);
@@ -104,13 +154,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
             Attribute::new(name, values)
         });
     }
-    groom.frames = document.frames(&decoded, &pieces)?;
     groom.provenance.format = "gltf".into();
-    groom.provenance.losses.extend(
-        losses::skipped_primitives(&skipped)
-            .into_iter()
-            .chain(document.unread_channels(&pieces)),
-    );
     Ok(groom)
 }
 
@@ -119,14 +163,14 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Groom, ImportError> {
 type LinePieces = (Vec<Lines>, Vec<Piece>, Vec<losses::Skipped>);
 
 /// The scene's [`LinePieces`].
-fn line_pieces(document: &Document) -> Result<LinePieces, ImportError> {
+fn line_pieces(document: &Document, targets: Targets) -> Result<LinePieces, ImportError> {
     let mut pieces = Vec::new();
     let mut skipped = Vec::new();
     let mut points = 0usize;
     let decoded = scene::walk_primitives(
         document,
         |mesh_index, mesh, primitive_index, primitive| {
-            let lines = document.lines(mesh_index, mesh, primitive_index, primitive)?;
+            let lines = document.lines(mesh_index, mesh, primitive_index, primitive, targets)?;
             if let (None, Checked::Valid(mode)) = (&lines, primitive.mode) {
                 skipped.push(losses::Skipped {
                     mesh: mesh_index,
