@@ -4,10 +4,10 @@
 //! `steps` steps with hair-hair friction `mu` (0: frictionless).
 //!
 //! `cargo run --release --example hair_friction_cost -- STRANDS MU SETTLE STEPS`
-//! (defaults 300 0.3 360 20). Under
-//! `valgrind --tool=callgrind --collect-atstart=no
-//! --toggle-collect=hair_friction_cost::measured`: the instructions of the
-//! STEPS steps alone.
+//! (defaults 300 0.3 360 20). Under `valgrind --tool=callgrind` with
+//! `RAYON_NUM_THREADS=1`, the STEPS steps' instructions are the difference
+//! from a run of 0 steps (toggling collection on `measured` counts only
+//! this thread, not rayon's worker that runs the steps).
 
 // A measuring tool: bad arguments or a failed step end it at once.
 #![allow(clippy::expect_used)]

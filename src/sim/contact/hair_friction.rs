@@ -11,8 +11,11 @@
 //! edge). The search lists each edge in the cells of a uniform grid (the
 //! cells, their walk and sort are grid.rs's, shared with the pairwise
 //! penalty) within its own margin of its segment: two radii plus twice
-//! its own motion in the step, so hair at rest is listed in the few small
-//! cells along it, and only moving hair reaches further.
+//! its own motion in the step relative to one velocity common to all
+//! edges (the mean of the hair's, when that gives smaller margins than
+//! zero: hair falling or swinging together), so hair at rest, or moving
+//! with the rest, is listed in the few small cells along it, and only
+//! hair moving against the rest reaches further.
 //!
 //! Inside the strand's constraint solve the other fibre is a kinematic
 //! target (Jacobi between strands: it moves on with its velocity at the
@@ -140,16 +143,95 @@ struct Chunk {
 
 /// How near an edge (first vertex `v`) may come to another this step: the
 /// contact distance `distance` plus twice the farthest its faster vertex
-/// moves in `dt` (at most `longest`). Two edges closer than the sum of
-/// their margins are all the pairs the contact test below may keep: it
-/// asks for a gap under `2 distance + 2 closing dt` (the closing speed is
-/// at most the sum of the two edges' fastest vertices) and under `reach`
+/// moves in `dt` relative to the step's common `reference` velocity (at
+/// most `longest`). Two edges closer than the sum of their margins are all
+/// the pairs the contact test below may keep: it asks for a gap under
+/// `2 distance + 2 closing dt`, and the closing speed of two points of the
+/// edges is at most the sum of the two edges' fastest vertices relative to
+/// any one velocity both edges measure against (the triangle inequality;
+/// a point's velocity is a blend of its vertices'), and under `reach`
 /// (`2 distance + min(2 fastest dt, longest)`).
 #[inline]
-fn margin(velocities: &[V3], v: usize, distance: f32, longest: f32, dt: f32) -> f32 {
-    let fastest = length(velocities[v]).max(length(velocities[v + 1]));
-    // (NaN or infinite speeds: the longest, like a fast edge.)
-    distance + (2.0 * fastest * dt).min(longest)
+fn margin(velocities: &[V3], v: usize, reference: V3, distance: f32, longest: f32, dt: f32) -> f32 {
+    let relative =
+        length(sub(velocities[v], reference)).max(length(sub(velocities[v + 1], reference)));
+    // (NaN or infinite speeds: the longest, like a fast edge. The pad
+    // covers the round-off of the subtraction against the contact test's
+    // own blend of the velocities.)
+    distance + (2.0 * pad(relative, reference) * dt).min(longest)
+}
+
+/// A relative speed grown by the f32 round-off of measuring it against
+/// `reference` rather than as a difference of two blended velocities.
+#[inline]
+fn pad(relative: f32, reference: V3) -> f32 {
+    relative * (1.0 + 1e-4) + 1e-4 * length(reference)
+}
+
+/// The velocity the step's margins are measured against: the mean
+/// velocity of the active vertices when margins relative to it are
+/// smaller in all (hair that swings or falls together: the pairs' closing
+/// speeds are small although the hair is fast), else zero (a few fast
+/// strands would drag the mean away from hair at rest). Either choice
+/// finds the same contacts; only the search's cost differs. Sums in fixed
+/// chunks, in order: the same for any thread count.
+fn reference_velocity(velocities: &[V3], owner: &[u32], longest: f32, dt: f32) -> V3 {
+    use rayon::prelude::*;
+    let active = |(v, o): (&V3, &u32)| *o != u32::MAX && is_finite3(*v);
+    let sums: Vec<([f64; 3], usize)> = velocities
+        .par_chunks(CHUNK_EDGES)
+        .zip(owner.par_chunks(CHUNK_EDGES))
+        .map(|(vs, os)| {
+            let mut sum = [0.0f64; 3];
+            let mut n = 0;
+            for (v, _) in vs.iter().zip(os).filter(|&p| active(p)) {
+                for k in 0..3 {
+                    sum[k] += f64::from(v[k]);
+                }
+                n += 1;
+            }
+            (sum, n)
+        })
+        .collect();
+    let (sum, n) = sums.iter().fold(([0.0f64; 3], 0usize), |(s, n), (c, m)| {
+        ([s[0] + c[0], s[1] + c[1], s[2] + c[2]], n + m)
+    });
+    if n == 0 {
+        return [0.0; 3];
+    }
+    let mean = sum.map(|s| (s / n as f64) as f32);
+    if !is_finite3(mean) {
+        return [0.0; 3];
+    }
+    // The search's cost grows with the margins' area around each edge:
+    // compare the sums of the squared motions either way.
+    let motion = |speed: f32| {
+        let m = f64::from((2.0 * speed * dt).min(longest));
+        m * m
+    };
+    let costs: Vec<(f64, f64)> = velocities
+        .par_chunks(CHUNK_EDGES)
+        .zip(owner.par_chunks(CHUNK_EDGES))
+        .map(|(vs, os)| {
+            vs.iter()
+                .zip(os)
+                .filter(|&p| active(p))
+                .fold((0.0, 0.0), |(a, r), (v, _)| {
+                    (
+                        a + motion(length(*v)),
+                        r + motion(pad(length(sub(*v, mean)), mean)),
+                    )
+                })
+        })
+        .collect();
+    let (still, relative) = costs
+        .iter()
+        .fold((0.0, 0.0), |(a, r), (c, d)| (a + c, r + d));
+    if relative < still {
+        mean
+    } else {
+        [0.0; 3]
+    }
 }
 
 /// The contact of edge `v` (`a`-`b`) with edge `f` (`c`-`d`) of another
@@ -310,7 +392,8 @@ impl HairContacts {
     /// longest rest edge (sizes the cells), `dt` the step.
     ///
     /// Each edge is listed in the grid cells within its margin (see
-    /// [`margin`]: its contact distance and how far it moves in the step)
+    /// [`margin`]: its contact distance and how far it moves in the step
+    /// relative to [`reference_velocity`])
     /// of its segment, cut where it crosses cell walls, and searches the
     /// cells it is listed in: two edges that may touch in the step share
     /// one. The edges it meets are tested in edge order, each once.
@@ -354,6 +437,7 @@ impl HairContacts {
             distance
         };
         let reach = 2.0 * distance + (2.0 * fastest * dt).min(longest);
+        let reference = reference_velocity(velocities, owner, longest, dt);
         let edge_of = |v: usize| -> Option<(u32, V3, V3)> {
             let strand = owner[v];
             if strand == u32::MAX || owner.get(v + 1) != Some(&strand) {
@@ -390,7 +474,7 @@ impl HairContacts {
                             spans[v - k * CHUNK_EDGES] = (0, 0);
                             continue;
                         };
-                        let margin = margin(velocities, v, distance, longest, dt);
+                        let margin = margin(velocities, v, reference, distance, longest, dt);
                         let placed = |key| Placed {
                             a,
                             b,
@@ -460,7 +544,7 @@ impl HairContacts {
                         let Some((own, a, b)) = edge_of(v) else {
                             continue;
                         };
-                        let margin = margin(velocities, v, distance, longest, dt);
+                        let margin = margin(velocities, v, reference, distance, longest, dt);
                         // Boxes apart by more than the two margins: no
                         // contact (most edges of a cell).
                         let near = |e: &Placed| {
@@ -766,6 +850,11 @@ mod tests {
     /// box, with random velocities up to 0.5 m/s, every 7th strand at
     /// 20 m/s (near more cells than an edge may be listed in).
     fn tangle(strands: usize, vertices: usize) -> (Vec<V3>, Vec<V3>, Vec<usize>) {
+        tangle_moving(strands, vertices, [0.0; 3])
+    }
+
+    /// [`tangle`], all of it moving on at `drift` besides.
+    fn tangle_moving(strands: usize, vertices: usize, drift: V3) -> (Vec<V3>, Vec<V3>, Vec<usize>) {
         let mut random = crate::generate::SplitMix64::new(7);
         let mut next = |scale: f64| (random.next_f64() * 2.0 - 1.0) * scale;
         let (mut positions, mut velocities, mut offsets) = (Vec::new(), Vec::new(), vec![0]);
@@ -774,7 +863,8 @@ mod tests {
             let speed = if strand % 7 == 3 { 20.0 } else { 0.5 };
             for _ in 0..vertices {
                 positions.push(p);
-                velocities.push([0.0f32; 3].map(|_| next(speed) as f32));
+                let v = [0.0f32; 3].map(|_| next(speed) as f32);
+                velocities.push(add(v, drift));
                 p = std::array::from_fn(|k| p[k] + next(0.0012) as f32);
             }
             offsets.push(positions.len());
@@ -847,6 +937,29 @@ mod tests {
     #[test]
     fn the_grid_finds_exactly_the_contacts_brute_force_finds_on_any_thread_count() {
         let (positions, velocities, offsets) = tangle(60, 12);
+        grid_equals_brute_force(&positions, &velocities, &offsets);
+    }
+
+    /// Hair falling together at 3 m/s: the margins are measured against
+    /// the hair's mean velocity (each edge's own speed would list it in
+    /// every cell about it), and the search still finds every contact.
+    #[test]
+    fn the_grid_finds_exactly_the_contacts_of_hair_moving_together() {
+        let (positions, velocities, offsets) = tangle_moving(60, 12, [1.0, -2.6, 1.0]);
+        let owner: Vec<u32> = (0..offsets.len() - 1)
+            .flat_map(|s| std::iter::repeat_n(s as u32, offsets[s + 1] - offsets[s]))
+            .collect();
+        let reference = reference_velocity(&velocities, &owner, 0.002, 1.0 / 360.0);
+        assert!(
+            length(sub(reference, [1.0, -2.6, 1.0])) < 1.0,
+            "{reference:?}"
+        );
+        grid_equals_brute_force(&positions, &velocities, &offsets);
+    }
+
+    fn grid_equals_brute_force(positions: &[V3], velocities: &[V3], offsets: &[usize]) {
+        let (positions, velocities, offsets) =
+            (positions.to_vec(), velocities.to_vec(), offsets.to_vec());
         let strands = offsets.len() - 1;
         let active: Vec<bool> = (0..strands).map(|s| s % 11 != 5).collect();
         let (radius, rest_longest, dt) = (3e-4, 0.002, 1.0 / 360.0);
