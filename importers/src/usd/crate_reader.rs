@@ -87,13 +87,20 @@ pub(super) fn read(path: &Path, bytes: &[u8]) -> Result<Stage> {
 }
 
 /// [`read`], but the array values of time samples that
-/// [`super::stream::deferrable`] names are left undecoded, as
+/// [`deferrable`] names are left undecoded, as
 /// [`Value::Deferred`] with their value rep: a frame-at-a-time reader
 /// decodes them with [`decode`] when it reaches their frame.
 pub(super) fn read_deferred(path: &Path, bytes: &[u8]) -> Result<Stage> {
     let mut reader = CrateReader::new(path, bytes, true);
     reader.structure()?;
     reader.stage()
+}
+
+/// Whether [`read_deferred`] may leave the time samples of attribute `name`
+/// undecoded. Not `curveVertexCounts`: whether the topology changes is
+/// decided from all its samples at once.
+fn deferrable(name: &str) -> bool {
+    name != "curveVertexCounts"
 }
 
 /// Decodes value reps of the crate file `bytes` (ones that
@@ -855,8 +862,7 @@ impl<'a> CrateReader<'a> {
                     }
                     "default" => attribute.default = Some(self.value(rep, &entry.text, 0)?),
                     "timeSamples" => {
-                        let defer =
-                            self.defer_samples && super::stream::deferrable(&attribute.name);
+                        let defer = self.defer_samples && deferrable(&attribute.name);
                         attribute.samples = self.time_samples(rep, &entry.text, defer)?
                     }
                     "elementSize" => {

@@ -19,13 +19,6 @@ use crate::{ImportError, Place};
 use groom::{Frame, Groom};
 use std::path::Path;
 
-/// Whether the crate reader may leave the time samples of attribute
-/// `name` undecoded. Not `curveVertexCounts`: whether the topology changes
-/// is decided from all its samples at once.
-pub(super) fn deferrable(name: &str) -> bool {
-    name != "curveVertexCounts"
-}
-
 /// An open crate layer whose frames are decoded one at a time.
 pub(crate) struct UsdStream {
     /// The layer as read, its deferrable samples undecoded.
