@@ -89,25 +89,15 @@ impl FrameStream {
         let mut mapped = Mapped::open(path)?;
         let opened = UsdStream::open(path, mapped.bytes())?;
         mapped.release();
-        let Some(Opened {
-            stream,
-            mut groom,
-            times,
-        }) = opened
-        else {
-            return Ok(None);
-        };
-        // As `crate::read` finishes a USD groom.
-        groom.provenance.source = Some(path.to_path_buf());
-        if groom.provenance.units_source.is_empty() {
-            groom.provenance.units_source = "file".into();
-        }
-        Ok(Some(FrameStream {
-            path: path.to_path_buf(),
-            groom,
-            times,
-            source: Source::Usd(mapped, Box::new(stream)),
-        }))
+        Ok(opened.map(
+            |Opened {
+                 stream,
+                 groom,
+                 times,
+             }| {
+                FrameStream::streamed(path, groom, times, Source::Usd(mapped, Box::new(stream)))
+            },
+        ))
     }
 
     /// A glTF file (`.glb`, `.gltf`) opened to stream from its memory map;
@@ -121,25 +111,30 @@ impl FrameStream {
         let mut mapped = Mapped::open(path)?;
         let opened = GltfStream::open(path, mapped.bytes())?;
         mapped.release();
-        let Some(gltf::Opened {
-            stream,
-            mut groom,
-            times,
-        }) = opened
-        else {
-            return Ok(None);
-        };
-        // As `crate::read` finishes a glTF groom.
+        Ok(opened.map(
+            |gltf::Opened {
+                 stream,
+                 groom,
+                 times,
+             }| {
+                FrameStream::streamed(path, groom, times, Source::Gltf(mapped, stream))
+            },
+        ))
+    }
+
+    /// A stream of a USD or glTF file, its groom finished as `crate::read`
+    /// finishes one of these formats (which record their units).
+    fn streamed(path: &Path, mut groom: Groom, times: Vec<f64>, source: Source) -> FrameStream {
         groom.provenance.source = Some(path.to_path_buf());
         if groom.provenance.units_source.is_empty() {
             groom.provenance.units_source = "file".into();
         }
-        Ok(Some(FrameStream {
+        FrameStream {
             path: path.to_path_buf(),
             groom,
             times,
-            source: Source::Gltf(mapped, stream),
-        }))
+            source,
+        }
     }
 
     /// The topology, rest points and attributes (no frames).

@@ -35,6 +35,24 @@ pub fn qdot(a: Quat, b: Quat) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
 }
 
+/// The angular velocity turning frame `q_old` into `q` in `1 / inv_dt`
+/// seconds, taking the nearer of `q` and `-q`. Im(q conj(q_old)) =
+/// Im((q - q_old) conj(q_old)) since q_old conj(q_old) is real; the
+/// difference form avoids the round-off of a product of two nearly equal
+/// frames (noise in a soft system).
+#[inline(always)]
+pub fn turn_rate(q: Quat, q_old: Quat, inv_dt: f32) -> V3 {
+    let sign = if qdot(q, q_old) < 0.0 { -1.0 } else { 1.0 };
+    let change = [
+        q[0] - sign * q_old[0],
+        q[1] - sign * q_old[1],
+        q[2] - sign * q_old[2],
+        q[3] - sign * q_old[3],
+    ];
+    let delta = qmul(change, conj(q_old));
+    scale(imag(delta), 2.0 * sign * inv_dt)
+}
+
 /// Unit quaternion; a degenerate one (zero or not finite) stays as it is so
 /// the quarantine sees it rather than a made-up frame.
 #[inline(always)]

@@ -858,23 +858,7 @@ fn velocities_strand(ctx: &Context<'_>, work: &mut Work, n: usize) -> bool {
         }
     }
     for e in 0..m {
-        // Im(q conj(q_old)) = Im((q - q_old) conj(q_old)) since q_old
-        // conj(q_old) is real; the difference form avoids the round-off of
-        // a product of two nearly equal frames (noise in a soft system).
-        let (q, q_old) = (work.q[e], work.q_old[e]);
-        let sign = if math::qdot(q, q_old) < 0.0 {
-            -1.0
-        } else {
-            1.0
-        };
-        let change = [
-            q[0] - sign * q_old[0],
-            q[1] - sign * q_old[1],
-            q[2] - sign * q_old[2],
-            q[3] - sign * q_old[3],
-        ];
-        let delta = math::qmul(change, math::conj(q_old));
-        work.omega[e] = math::scale(math::imag(delta), 2.0 * sign * ctx.inv_dt);
+        work.omega[e] = math::turn_rate(work.q[e], work.q_old[e], ctx.inv_dt);
     }
     all_finite(&work.p[..n], &work.v[..n], &work.q[..m], &work.omega[..m])
 }

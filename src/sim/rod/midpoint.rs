@@ -21,7 +21,7 @@
 //! moves kinematically would be extrapolated as a velocity it never had.
 
 use crate::sim::contact::colliders::boxes_overlap;
-use crate::sim::math::{self, Quat, V3};
+use crate::sim::math::{self, V3};
 use crate::sim::work::{Context, StrandMut, Work};
 
 /// Passes of the `[1/4, 1/2, 1/4]` filter over the extrapolation along the
@@ -179,7 +179,7 @@ pub(in crate::sim) fn extrapolate(ctx: &Context<'_>, s: &StrandMut<'_>, work: &m
     for e in 0..m {
         let q_mid = work.q[e];
         let q_old = work.q_old[e];
-        let omega_mid = turn_rate(q_mid, q_old, inv_h);
+        let omega_mid = math::turn_rate(q_mid, q_old, inv_h);
         let mid_edge = math::sub(work.mid[e + 1], work.mid[e]);
         let edge = math::sub(work.p[e + 1], work.p[e]);
         let (mid_length, length) = (math::length(mid_edge), math::length(edge));
@@ -195,24 +195,6 @@ pub(in crate::sim) fn extrapolate(ctx: &Context<'_>, s: &StrandMut<'_>, work: &m
         let twist = math::dot(omega_mid, t_mid);
         work.omega[e] = math::add(swing, math::scale(t, twist));
     }
-}
-
-/// The angular velocity turning `q_old` into `q` in `1 / inv_dt` (as the
-/// backward-Euler velocities are found, step.rs).
-fn turn_rate(q: Quat, q_old: Quat, inv_dt: f32) -> V3 {
-    let sign = if math::qdot(q, q_old) < 0.0 {
-        -1.0
-    } else {
-        1.0
-    };
-    let change = [
-        q[0] - sign * q_old[0],
-        q[1] - sign * q_old[1],
-        q[2] - sign * q_old[2],
-        q[3] - sign * q_old[3],
-    ];
-    let delta = math::qmul(change, math::conj(q_old));
-    math::scale(math::imag(delta), 2.0 * sign * inv_dt)
 }
 
 /// `SMOOTHING_PASSES` of `[1/4, 1/2, 1/4]` along the strand; fixed
